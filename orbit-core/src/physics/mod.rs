@@ -1,0 +1,273 @@
+//! The physics-backend contract: a backend builds `num_envs` copies of a resolved scene and
+//! steps them together. State is published as batched arrays, one row per env (structure of
+//! arrays: one array per quantity). All poses are relative to each env's own origin.
+
+mod layout;
+mod registry;
+
+use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+pub use layout::*;
+pub use registry::*;
+
+use crate::scene::RootState;
+
+/// Simulation settings (Isaac Lab `SimulationCfg`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SimCfg {
+    /// Physics time step in seconds.
+    #[serde(default = "default_dt")]
+    pub dt: f32,
+    /// Gravity vector (m/s²).
+    #[serde(default = "default_gravity")]
+    pub gravity: Vec3,
+    /// Velocity-solver iterations per step.
+    #[serde(default = "default_iterations")]
+    pub solver_iterations: usize,
+    /// Name of the physics backend (`"rapier"`, `"wgpu"`).
+    #[serde(default = "default_backend")]
+    pub backend: String,
+    /// Worker threads for CPU backends (0 = one per core).
+    #[serde(default)]
+    pub num_threads: usize,
+}
+
+fn default_dt() -> f32 {
+    0.002
+}
+fn default_gravity() -> Vec3 {
+    Vec3::new(0.0, 0.0, -9.81)
+}
+fn default_iterations() -> usize {
+    4
+}
+fn default_backend() -> String {
+    "rapier".to_string()
+}
+
+impl Default for SimCfg {
+    fn default() -> Self {
+        Self {
+            dt: default_dt(),
+            gravity: default_gravity(),
+            solver_iterations: default_iterations(),
+            backend: default_backend(),
+            num_threads: 0,
+        }
+    }
+}
+
+impl SimCfg {
+    /// Checks the values are usable.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        if !(self.dt.is_finite() && self.dt > 0.0) {
+            return Err(PhysicsError::InvalidInput(format!(
+                "sim.dt must be a positive number of seconds, got {}",
+                self.dt
+            )));
+        }
+        if !self.gravity.is_finite() {
+            return Err(PhysicsError::InvalidInput(format!(
+                "sim.gravity must be finite, got {:?}",
+                self.gravity
+            )));
+        }
+        if self.solver_iterations == 0 {
+            return Err(PhysicsError::InvalidInput(
+                "sim.solver_iterations must be at least 1".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Errors reported by physics backends.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PhysicsError {
+    /// No backend of that name is registered.
+    #[error("unknown physics backend `{name}`; registered backends: {available:?}")]
+    UnknownBackend {
+        /// Requested name.
+        name: String,
+        /// Registered names.
+        available: Vec<String>,
+    },
+    /// The scene cannot be represented by this backend.
+    #[error("the `{backend}` backend cannot build this scene: {reason}")]
+    Unsupported {
+        /// Backend name.
+        backend: String,
+        /// What is unsupported.
+        reason: String,
+    },
+    /// An entity name or id that does not exist.
+    #[error("no {kind} named `{name}`; available: {available:?}")]
+    UnknownEntity {
+        /// "articulation", "rigid object", "body", …
+        kind: &'static str,
+        /// Requested name.
+        name: String,
+        /// Known names.
+        available: Vec<String>,
+    },
+    /// Wrong buffer length, env id out of range, non-finite values.
+    #[error("invalid input: {0}")]
+    InvalidInput(String),
+}
+
+/// Batched state of one articulation: each slice holds `num_envs` rows.
+#[derive(Clone, Copy, Debug)]
+pub struct ArticulationView<'a> {
+    /// Joint positions, `num_envs × num_dofs`.
+    pub joint_pos: &'a [f32],
+    /// Joint velocities, `num_envs × num_dofs`.
+    pub joint_vel: &'a [f32],
+    /// Generalized bias forces (gravity + Coriolis/centrifugal), `num_envs × num_dofs`: the
+    /// joint efforts that hold the current velocity with zero acceleration (MuJoCo `qfrc_bias`).
+    pub bias_forces: &'a [f32],
+    /// Efforts applied by the drives and the effort input in the last step, `num_envs × num_dofs`.
+    pub applied_effort: &'a [f32],
+    /// Link origin positions, `num_envs × num_links`.
+    pub link_pos: &'a [Vec3],
+    /// Link orientations, `num_envs × num_links`.
+    pub link_quat: &'a [Quat],
+    /// Link origin linear velocities (world axes), `num_envs × num_links`.
+    pub link_lin_vel: &'a [Vec3],
+    /// Link angular velocities (world axes), `num_envs × num_links`.
+    pub link_ang_vel: &'a [Vec3],
+}
+
+/// Batched state of one free rigid object: one entry per env.
+#[derive(Clone, Copy, Debug)]
+pub struct RigidObjectView<'a> {
+    /// Body origin positions.
+    pub pos: &'a [Vec3],
+    /// Orientations.
+    pub quat: &'a [Quat],
+    /// Body origin linear velocities (world axes).
+    pub lin_vel: &'a [Vec3],
+    /// Angular velocities (world axes).
+    pub ang_vel: &'a [Vec3],
+}
+
+/// A body whose physical parameters can be randomised per env.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BodyRef {
+    /// Link `link` of articulation `articulation`.
+    Link {
+        /// Articulation index in the layout.
+        articulation: usize,
+        /// Link index.
+        link: usize,
+    },
+    /// A free rigid object.
+    RigidObject(usize),
+}
+
+/// A physics engine simulating `num_envs` independent copies of one scene.
+///
+/// Writes take full batches (`num_envs` rows) or rows for a set of env ids; reads return
+/// borrowed batched arrays refreshed by every [`step`](PhysicsBackend::step) and every state
+/// write. Invalid input returns an error and changes nothing.
+pub trait PhysicsBackend: Send {
+    /// The registered backend name.
+    fn name(&self) -> &'static str;
+    /// Number of environments.
+    fn num_envs(&self) -> usize;
+    /// Names and sizes of the simulated entities.
+    fn layout(&self) -> &SceneLayout;
+    /// The physics time step.
+    fn dt(&self) -> f32;
+
+    /// Advances every env by one time step.
+    fn step(&mut self) -> Result<(), PhysicsError>;
+
+    /// Batched state of articulation `a`.
+    fn articulation(&self, a: usize) -> ArticulationView<'_>;
+    /// Batched state of rigid object `o`.
+    fn rigid_object(&self, o: usize) -> RigidObjectView<'_>;
+
+    /// Sets the drives' position targets, `num_envs × num_dofs`.
+    fn set_joint_position_targets(&mut self, a: usize, targets: &[f32])
+    -> Result<(), PhysicsError>;
+    /// Sets the drives' velocity targets, `num_envs × num_dofs`.
+    fn set_joint_velocity_targets(&mut self, a: usize, targets: &[f32])
+    -> Result<(), PhysicsError>;
+    /// Sets feed-forward joint efforts held until changed, `num_envs × num_dofs`; the sum with
+    /// the drive effort is clipped to each joint's effort limit.
+    fn set_joint_efforts(&mut self, a: usize, efforts: &[f32]) -> Result<(), PhysicsError>;
+    /// Overwrites joint positions and velocities of the listed envs (`env_ids.len() × num_dofs`
+    /// each) and zeroes their targets' effect history.
+    fn write_joint_state(
+        &mut self,
+        a: usize,
+        env_ids: &[usize],
+        pos: &[f32],
+        vel: &[f32],
+    ) -> Result<(), PhysicsError>;
+    /// Overwrites the root state of a rigid object in the listed envs.
+    fn write_root_state(
+        &mut self,
+        o: usize,
+        env_ids: &[usize],
+        states: &[RootState],
+    ) -> Result<(), PhysicsError>;
+    /// Sets the mass of a body in the listed envs, scaling its inertia with it.
+    fn set_masses(
+        &mut self,
+        body: BodyRef,
+        env_ids: &[usize],
+        masses: &[f32],
+    ) -> Result<(), PhysicsError>;
+    /// Sets the friction coefficient of every shape of a body in the listed envs.
+    fn set_friction(
+        &mut self,
+        body: BodyRef,
+        env_ids: &[usize],
+        friction: &[f32],
+    ) -> Result<(), PhysicsError>;
+}
+
+/// Checks a batch buffer has `rows × cols` finite values.
+pub fn check_batch(
+    what: &str,
+    values: &[f32],
+    rows: usize,
+    cols: usize,
+) -> Result<(), PhysicsError> {
+    if values.len() != rows * cols {
+        return Err(PhysicsError::InvalidInput(format!(
+            "{what}: expected {rows} × {cols} = {} values, got {}",
+            rows * cols,
+            values.len()
+        )));
+    }
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(PhysicsError::InvalidInput(format!(
+            "{what}: value {} at row {} column {} is not finite",
+            values[i],
+            i / cols.max(1),
+            i % cols.max(1)
+        )));
+    }
+    Ok(())
+}
+
+/// Checks env ids are in range and unique.
+pub fn check_env_ids(env_ids: &[usize], num_envs: usize) -> Result<(), PhysicsError> {
+    let mut seen = vec![false; num_envs];
+    for &e in env_ids {
+        if e >= num_envs {
+            return Err(PhysicsError::InvalidInput(format!(
+                "env id {e} is out of range (num_envs = {num_envs})"
+            )));
+        }
+        if std::mem::replace(&mut seen[e], true) {
+            return Err(PhysicsError::InvalidInput(format!(
+                "env id {e} is listed twice"
+            )));
+        }
+    }
+    Ok(())
+}
