@@ -93,6 +93,38 @@ impl ArticulationKinematics {
         &self.poses
     }
 
+    /// Replaces the mass properties of one link (mass randomisation).
+    pub fn set_inertial(&mut self, link: usize, inertial: crate::scene::Inertial) {
+        self.model.links[link].inertial = inertial;
+    }
+
+    /// Link origin velocities `(linear, angular)` in world axes for joint velocities `qd`, after
+    /// [`forward`](Self::forward) (fixed root).
+    pub fn link_velocities(&self, qd: &[f32], lin: &mut [Vec3], ang: &mut [Vec3]) {
+        for (i, link) in self.model.links.iter().enumerate() {
+            let Some(p) = link.parent else {
+                lin[i] = Vec3::ZERO;
+                ang[i] = Vec3::ZERO;
+                continue;
+            };
+            let r = self.poses[i].pos - self.poses[p].pos;
+            let (mut v, mut w) = (lin[p] + ang[p].cross(r), ang[p]);
+            if let (Some(d), Some(j)) = (self.link_dof[i], &link.joint) {
+                match j.kind {
+                    JointKind::Revolute => w += self.axes[i] * qd[d],
+                    _ => v += self.axes[i] * qd[d],
+                }
+            }
+            lin[i] = v;
+            ang[i] = w;
+        }
+    }
+
+    /// World axis of each link's joint after [`forward`](Self::forward).
+    pub fn joint_axes(&self) -> &[Vec3] {
+        &self.axes
+    }
+
     /// World pose of a link-attached frame after [`forward`](Self::forward).
     pub fn frame_pose(&self, link: usize, offset: &Pose) -> Pose {
         self.poses[link].mul_pose(offset)

@@ -82,8 +82,8 @@ impl Geometry {
     }
 }
 
-/// Surface properties of a shape. Contacts combine frictions with `max` (MuJoCo's rule for
-/// equal-priority geoms).
+/// Surface properties of a shape. A contact takes the friction of the shape with the higher
+/// `priority`, or the larger friction when priorities are equal (MuJoCo's mixing rule).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     /// Coulomb sliding friction coefficient.
@@ -91,6 +91,9 @@ pub struct Material {
     /// Restitution coefficient (0 = perfectly inelastic).
     #[serde(default)]
     pub restitution: f32,
+    /// Contact priority (MuJoCo geom `priority`).
+    #[serde(default)]
+    pub priority: i32,
 }
 
 impl Default for Material {
@@ -98,6 +101,18 @@ impl Default for Material {
         Self {
             friction: 1.0,
             restitution: 0.0,
+            priority: 0,
+        }
+    }
+}
+
+impl Material {
+    /// Friction of a contact between two materials (priority wins, else the maximum).
+    pub fn combined_friction(&self, other: &Material) -> f32 {
+        match self.priority.cmp(&other.priority) {
+            std::cmp::Ordering::Greater => self.friction,
+            std::cmp::Ordering::Less => other.friction,
+            std::cmp::Ordering::Equal => self.friction.max(other.friction),
         }
     }
 }

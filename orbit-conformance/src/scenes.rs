@@ -1,0 +1,111 @@
+//! Small scenes built in code for the conformance checks.
+
+use glam::{Mat3, Vec3};
+use orbit_core::math::Pose;
+use orbit_core::physics::{PhysicsBackend, SimCfg, build_backend};
+use orbit_core::scene::{
+    ArticulationCfg, ArticulationModel, AssetSource, Geometry, Inertial, Joint, Link, Material,
+    RigidObjectCfg, RootStateCfg, SceneCfg, SceneDesc, Shape, StaticObjectCfg,
+};
+
+/// Resolves a scene config whose models are inline or bundled assets.
+pub fn resolve(cfg: &SceneCfg) -> SceneDesc {
+    cfg.resolve(&|src: &AssetSource| match src {
+        AssetSource::Model(m) => Ok(m.clone()),
+        other => Err(format!("unsupported in this build: {other:?}")),
+    })
+        .unwrap_or_else(|e| panic!("conformance scene does not resolve: {e}"))
+}
+
+/// Builds a backend by name for a scene.
+pub fn build(backend: &str, scene: &SceneDesc, num_envs: usize, dt: f32) -> Box<dyn PhysicsBackend> {
+    let sim = SimCfg {
+        dt,
+        backend: backend.to_string(),
+        num_threads: 1,
+        ..SimCfg::default()
+    };
+    build_backend(scene, num_envs, &sim).unwrap_or_else(|e| panic!("backend `{backend}` failed to build: {e}"))
+}
+
+/// A box shape with a material.
+pub fn box_shape(half_extents: Vec3, pos: Vec3, friction: f32) -> Shape {
+    Shape {
+        geometry: Geometry::Box { half_extents },
+        pose: Pose::from_pos(pos),
+        material: Material {
+            friction,
+            ..Material::default()
+        },
+        filter: Default::default(),
+    }
+}
+
+/// A static table: a box whose top face is at `top_z`.
+pub fn table(top_z: f32, friction: f32) -> StaticObjectCfg {
+    StaticObjectCfg {
+        name: "table".into(),
+        pose: Pose::from_pos(Vec3::new(0.0, 0.0, top_z - 0.05)),
+        shapes: vec![box_shape(Vec3::new(2.0, 2.0, 0.05), Vec3::ZERO, friction)],
+    }
+}
+
+/// A free solid box of the given mass and half-extents.
+pub fn free_box(name: &str, half: Vec3, mass: f32, friction: f32, init: RootStateCfg) -> RigidObjectCfg {
+    RigidObjectCfg {
+        name: name.into(),
+        shapes: vec![box_shape(half, Vec3::ZERO, friction)],
+        inertial: None,
+        shape_masses: vec![mass],
+        init_state: init,
+    }
+}
+
+/// A pendulum: a fixed pivot link and one link on a revolute joint about y, carrying a point-like
+/// mass `mass` at distance `length` below the pivot (inertia of a solid sphere of radius
+/// `radius` about its centre). The pivot sits at height `pivot_z`.
+pub fn pendulum(mass: f32, length: f32, radius: f32, pivot_z: f32) -> ArticulationModel {
+    let sphere_i = 0.4 * mass * radius * radius;
+    ArticulationModel {
+        name: "pendulum".into(),
+        links: vec![
+            Link {
+                name: "pivot".into(),
+                parent: None,
+                joint: None,
+                inertial: Inertial::ZERO,
+                shapes: vec![],
+                frames: vec![],
+            },
+            Link {
+                name: "bob".into(),
+                parent: Some(0),
+                joint: Some(Joint::revolute(
+                    "hinge",
+                    Pose::from_pos(Vec3::new(0.0, 0.0, pivot_z)),
+                    Vec3::Y,
+                    None,
+                )),
+                inertial: Inertial {
+                    mass,
+                    com: Vec3::new(0.0, 0.0, -length),
+                    inertia: Mat3::from_diagonal(Vec3::splat(sphere_i)),
+                },
+                shapes: vec![],
+                frames: vec![],
+            },
+        ],
+    }
+}
+
+/// An articulation config around an inline model with no actuators.
+pub fn passive_articulation(model: ArticulationModel) -> ArticulationCfg {
+    ArticulationCfg {
+        name: model.name.clone(),
+        spawn: AssetSource::Model(model),
+        init_state: Default::default(),
+        actuators: Default::default(),
+        self_collisions: false,
+        fixed_base: true,
+    }
+}

@@ -1,0 +1,488 @@
+//! One environment: a rapier world holding the scene's articulations (as reduced-coordinate
+//! multibodies), free rigid objects and static fixtures.
+
+use glam::{Quat, Vec3};
+use orbit_core::kinematics::ArticulationKinematics;
+use orbit_core::math::Pose as OrbitPose;
+use orbit_core::physics::{PhysicsError, SimCfg};
+use orbit_core::scene::{
+    ArticulationDesc, Geometry, Inertial, JointDrive, JointKind, RigidBodyModel, RootState,
+    SceneDesc, Shape,
+};
+use rapier3d::prelude::*;
+
+use crate::hooks::{FrictionPriority, encode_material};
+
+/// Per-env handles and scratch of one articulation.
+pub(crate) struct EnvArticulation {
+    /// Rigid body of each link.
+    pub links: Vec<RigidBodyHandle>,
+    /// Multibody index.
+    pub multibody: MultibodyIndex,
+    /// Multibody link id of each dof.
+    pub dof_mb_link: Vec<usize>,
+    /// Spatial axis (0..6) of each dof in its joint's coordinates.
+    pub dof_axis: Vec<usize>,
+    /// Link index owning each dof.
+    pub dof_link: Vec<usize>,
+    /// Kinematics and dynamics of this env's copy (per-env masses).
+    pub kin: ArticulationKinematics,
+    /// Root pose.
+    pub root: OrbitPose,
+    /// This env's published state.
+    pub out: ArticulationRow,
+}
+
+/// One env's published state of one articulation.
+pub(crate) struct ArticulationRow {
+    pub q: Vec<f32>,
+    pub qd: Vec<f32>,
+    pub bias: Vec<f32>,
+    pub applied: Vec<f32>,
+    pub link_pos: Vec<Vec3>,
+    pub link_quat: Vec<Quat>,
+    pub link_lin_vel: Vec<Vec3>,
+    pub link_ang_vel: Vec<Vec3>,
+}
+
+impl ArticulationRow {
+    fn new(n_dofs: usize, n_links: usize) -> Self {
+        Self {
+            q: vec![0.0; n_dofs],
+            qd: vec![0.0; n_dofs],
+            bias: vec![0.0; n_dofs],
+            applied: vec![0.0; n_dofs],
+            link_pos: vec![Vec3::ZERO; n_links],
+            link_quat: vec![Quat::IDENTITY; n_links],
+            link_lin_vel: vec![Vec3::ZERO; n_links],
+            link_ang_vel: vec![Vec3::ZERO; n_links],
+        }
+    }
+}
+
+/// One environment's physics world.
+pub(crate) struct EnvWorld {
+    pub world: PhysicsWorld,
+    pub arts: Vec<EnvArticulation>,
+    pub objects: Vec<RigidBodyHandle>,
+}
+
+fn to_rapier_pose(p: &OrbitPose) -> Pose {
+    Pose::from_parts(p.pos, p.rot)
+}
+
+/// Rapier cylinders are y-aligned; ours are z-aligned.
+fn z_to_y() -> Quat {
+    Quat::from_rotation_x(std::f32::consts::FRAC_PI_2)
+}
+
+fn collider_for(shape: &Shape) -> ColliderBuilder {
+    let (builder, local) = match shape.geometry {
+        Geometry::Sphere { radius } => (ColliderBuilder::ball(radius), Quat::IDENTITY),
+        Geometry::Capsule {
+            radius,
+            half_length,
+        } => (ColliderBuilder::capsule_z(half_length, radius), Quat::IDENTITY),
+        Geometry::Box { half_extents: h } => (ColliderBuilder::cuboid(h.x, h.y, h.z), Quat::IDENTITY),
+        Geometry::Cylinder {
+            radius,
+            half_length,
+        } => (ColliderBuilder::cylinder(half_length, radius), z_to_y()),
+        Geometry::Plane => (
+            ColliderBuilder::halfspace(rapier3d::na::Unit::new_unchecked(Vec3::Z)),
+            Quat::IDENTITY,
+        ),
+    };
+    let pose = OrbitPose::new(shape.pose.pos, shape.pose.rot * local);
+    let mut hooks = ActiveHooks::empty();
+    if shape.material.priority != 0 {
+        hooks |= ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    }
+    builder
+        .position(to_rapier_pose(&pose))
+        .density(0.0)
+        .friction(shape.material.friction)
+        .friction_combine_rule(CoefficientCombineRule::Max)
+        .restitution(shape.material.restitution)
+        .collision_groups(InteractionGroups::new(
+            Group::from_bits_truncate(shape.filter.groups),
+            Group::from_bits_truncate(shape.filter.mask),
+            InteractionTestMode::And,
+        ))
+        .active_hooks(hooks)
+        .user_data(encode_material(&shape.material))
+}
+
+fn mass_props(i: &Inertial) -> MassProperties {
+    MassProperties::with_inertia_matrix(i.com, i.mass, i.inertia)
+}
+
+fn add_shapes(world: &mut PhysicsWorld, body: RigidBodyHandle, shapes: &[Shape]) {
+    for s in shapes {
+        world
+            .colliders
+            .insert_with_parent(collider_for(s), body, &mut world.bodies);
+    }
+}
+
+fn add_body(world: &mut PhysicsWorld, model: &RigidBodyModel, pose: &OrbitPose, dynamic: bool) -> RigidBodyHandle {
+    let builder = if dynamic {
+        RigidBodyBuilder::dynamic().additional_mass_properties(mass_props(&model.inertial))
+    } else {
+        RigidBodyBuilder::fixed()
+    };
+    let body = world
+        .bodies
+        .insert(builder.pose(to_rapier_pose(pose)).can_sleep(false));
+    add_shapes(world, body, &model.shapes);
+    body
+}
+
+/// The joint between a link and its parent, as a rapier generic joint. Rapier's revolute and
+/// prismatic joints move about/along the joint frame's x axis.
+fn rapier_joint(origin: &OrbitPose, axis: Vec3, kind: JointKind, limits: Option<[f32; 2]>) -> GenericJoint {
+    let x_to_axis = Quat::from_rotation_arc(Vec3::X, axis.normalize());
+    let locked = match kind {
+        JointKind::Revolute => JointAxesMask::LOCKED_REVOLUTE_AXES,
+        JointKind::Prismatic => JointAxesMask::LOCKED_PRISMATIC_AXES,
+        JointKind::Fixed => JointAxesMask::LOCKED_FIXED_AXES,
+    };
+    let mut builder = GenericJointBuilder::new(locked)
+        .local_frame1(Pose::from_parts(origin.pos, origin.rot * x_to_axis))
+        .local_frame2(Pose::from_parts(Vec3::ZERO, x_to_axis));
+    if let Some(l) = limits {
+        let axis = if kind == JointKind::Revolute {
+            JointAxis::AngX
+        } else {
+            JointAxis::LinX
+        };
+        builder = builder.limits(axis, l);
+    }
+    builder.build()
+}
+
+fn build_articulation(
+    world: &mut PhysicsWorld,
+    desc: &ArticulationDesc,
+) -> Result<EnvArticulation, PhysicsError> {
+    let model = &desc.model;
+    let mut kin = ArticulationKinematics::new(model);
+    let poses = kin.forward(&desc.root_pose, &desc.default_joint_pos).to_vec();
+    let mut links = Vec::with_capacity(model.links.len());
+    for (i, link) in model.links.iter().enumerate() {
+        let body = RigidBodyModel {
+            name: link.name.clone(),
+            inertial: link.inertial,
+            shapes: link.shapes.clone(),
+        };
+        if i > 0 && link.inertial.mass <= 0.0 {
+            return Err(PhysicsError::Unsupported {
+                backend: "rapier".into(),
+                reason: format!(
+                    "link `{}` of `{}` is movable but has no mass",
+                    link.name, desc.name
+                ),
+            });
+        }
+        links.push(add_body(world, &body, &poses[i], i > 0));
+    }
+    let mut dof_mb_link = Vec::new();
+    let mut dof_axis = Vec::new();
+    let mut dof_link = Vec::new();
+    let mut multibody = None;
+    for (i, link) in model.links.iter().enumerate().skip(1) {
+        let (Some(parent), Some(joint)) = (link.parent, &link.joint) else {
+            unreachable!("validated model: every non-root link has a parent joint")
+        };
+        let gj = rapier_joint(&joint.origin, joint.axis, joint.kind, joint.limits);
+        let handle = world
+            .multibody_joints
+            .insert(links[parent], links[i], gj, false)
+            .ok_or_else(|| PhysicsError::Unsupported {
+                backend: "rapier".into(),
+                reason: format!("could not add joint `{}` of `{}` to a multibody", joint.name, desc.name),
+            })?;
+        let (mb, link_id) = world
+            .multibody_joints
+            .get(handle)
+            .map(|(mb, id)| (mb.root().rigid_body_handle(), id))
+            .expect("joint just inserted");
+        let index = world
+            .multibody_joints
+            .rigid_body_link(mb)
+            .expect("root is a multibody link")
+            .multibody;
+        multibody = Some(index);
+        if joint.kind != JointKind::Fixed {
+            dof_mb_link.push(link_id);
+            dof_axis.push(if joint.kind == JointKind::Revolute { 3 } else { 0 });
+            dof_link.push(i);
+        }
+    }
+    let multibody = multibody.ok_or_else(|| PhysicsError::Unsupported {
+        backend: "rapier".into(),
+        reason: format!("articulation `{}` has a single link; use a static or rigid object", desc.name),
+    })?;
+    let mb = world
+        .multibody_joints
+        .get_multibody_mut(multibody)
+        .expect("multibody exists");
+    mb.set_self_contacts_enabled(desc.self_collisions);
+    // Rapier gives new angular dofs a default damping of 0.1; use the model's values instead.
+    mb.damping_mut().fill(0.0);
+    for (d, &l) in dof_link.iter().enumerate() {
+        let j = model.links[l].joint.as_ref().expect("dof link has a joint");
+        let id = mb.link(dof_mb_link[d]).expect("link exists").assembly_id();
+        mb.damping_mut()[id] = j.damping;
+        mb.armature_mut()[id] = j.armature;
+        mb.frictions_mut()[id] = j.friction;
+    }
+    let n_links = model.links.len();
+    let n_dofs = dof_link.len();
+    Ok(EnvArticulation {
+        links,
+        multibody,
+        dof_mb_link,
+        dof_axis,
+        dof_link,
+        kin,
+        root: desc.root_pose,
+        out: ArticulationRow::new(n_dofs, n_links),
+    })
+}
+
+impl EnvWorld {
+    /// Builds one env of the scene.
+    pub fn build(scene: &SceneDesc, sim: &SimCfg) -> Result<Self, PhysicsError> {
+        let mut world = PhysicsWorld::new();
+        world.gravity = sim.gravity;
+        world.integration_parameters.dt = sim.dt;
+        world.integration_parameters.num_solver_iterations = sim.solver_iterations;
+        for s in &scene.static_objects {
+            add_body(&mut world, &s.body, &s.pose, false);
+        }
+        let objects = scene
+            .rigid_objects
+            .iter()
+            .map(|o| add_body(&mut world, &o.body, &o.default_root_state.pose, true))
+            .collect();
+        let arts = scene
+            .articulations
+            .iter()
+            .map(|a| build_articulation(&mut world, a))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut env = Self {
+            world,
+            arts,
+            objects,
+        };
+        for (o, desc) in scene.rigid_objects.iter().enumerate() {
+            env.write_root_state(o, &desc.default_root_state);
+        }
+        for (a, desc) in scene.articulations.iter().enumerate() {
+            env.write_joint_state(a, &desc.default_joint_pos, &desc.default_joint_vel);
+        }
+        Ok(env)
+    }
+
+    /// Refreshes the published state of articulation `a` from the simulation: joint state,
+    /// link poses and velocities (from the joint state), bias forces and the applied-effort
+    /// estimate `clip(k (q* − q) + d (q̇* − q̇) + τ_ff)`.
+    pub fn publish(&mut self, a: usize, gravity: Vec3, drives: &[JointDrive], input: &ArticulationInputs<'_>) {
+        let art = &mut self.arts[a];
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody(art.multibody)
+            .expect("multibody exists");
+        let vel = mb.generalized_velocity();
+        let out = &mut art.out;
+        for d in 0..out.q.len() {
+            let link = mb.link(art.dof_mb_link[d]).expect("link exists");
+            out.q[d] = link.joint().coords()[art.dof_axis[d]];
+            out.qd[d] = vel[link.assembly_id()];
+            let dr = &drives[d];
+            let tau = dr.stiffness * (input.pos_target[d] - out.q[d])
+                + dr.damping * (input.vel_target[d] - out.qd[d])
+                + input.effort[d];
+            out.applied[d] = tau.clamp(-dr.effort_limit, dr.effort_limit);
+        }
+        art.kin.bias_forces(&art.root, &out.q, &out.qd, gravity, &mut out.bias);
+        // `bias_forces` ran forward kinematics on the current state.
+        art.kin.link_velocities(&out.qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
+        let poses = art.kin.forward(&art.root, &out.q);
+        for (l, p) in poses.iter().enumerate() {
+            out.link_pos[l] = p.pos;
+            out.link_quat[l] = p.rot;
+        }
+    }
+
+    /// Overwrites joint positions and velocities of articulation `a`.
+    pub fn write_joint_state(&mut self, a: usize, q: &[f32], qd: &[f32]) {
+        let art = &self.arts[a];
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody_mut(art.multibody)
+            .expect("multibody exists");
+        let mut disp = [0.0f32; 64];
+        let n = mb.ndofs();
+        debug_assert!(n <= disp.len());
+        for d in 0..q.len() {
+            let link = mb.link(art.dof_mb_link[d]).expect("link exists");
+            disp[link.assembly_id()] = q[d] - link.joint().coords()[art.dof_axis[d]];
+        }
+        mb.apply_displacements(&disp[..n]);
+        for d in 0..q.len() {
+            let id = mb.link(art.dof_mb_link[d]).expect("link exists").assembly_id();
+            mb.generalized_velocity_mut()[id] = qd[d];
+        }
+        mb.forward_kinematics(&self.world.bodies, false);
+        mb.update_rigid_bodies(&mut self.world.bodies, true);
+        // Give the link bodies the velocities of the new joint state.
+        let art = &mut self.arts[a];
+        art.kin.forward(&art.root, q);
+        let out = &mut art.out;
+        art.kin.link_velocities(qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
+        for (l, &h) in art.links.iter().enumerate().skip(1) {
+            let rb = &mut self.world.bodies[h];
+            let origin = rb.position().translation;
+            let com = rb.center_of_mass();
+            rb.set_linvel(out.link_lin_vel[l] + out.link_ang_vel[l].cross(com - origin), true);
+            rb.set_angvel(out.link_ang_vel[l], true);
+        }
+    }
+
+    /// Overwrites the root state of rigid object `o` (velocities of the body origin).
+    pub fn write_root_state(&mut self, o: usize, s: &RootState) {
+        let rb = &mut self.world.bodies[self.objects[o]];
+        rb.set_position(to_rapier_pose(&s.pose), true);
+        let com = s.pose.transform_point(rb.local_center_of_mass());
+        rb.set_linvel(s.lin_vel + s.ang_vel.cross(com - s.pose.pos), true);
+        rb.set_angvel(s.ang_vel, true);
+        rb.reset_forces(false);
+        rb.reset_torques(false);
+    }
+
+    /// Root state of rigid object `o` (velocity of the body origin).
+    pub fn read_root_state(&self, o: usize) -> RootState {
+        let rb = &self.world.bodies[self.objects[o]];
+        let p = rb.position();
+        let pose = OrbitPose::new(p.translation, p.rotation);
+        RootState {
+            pose,
+            lin_vel: rb.velocity_at_point(pose.pos),
+            ang_vel: rb.angvel(),
+        }
+    }
+
+    /// Advances the world one step (after [`apply_inputs`](Self::apply_inputs)).
+    pub fn step_world(&mut self, drives: &[&[JointDrive]]) {
+        self.world.step_with_events(&FrictionPriority, &());
+        for (a, drive) in drives.iter().enumerate() {
+            self.clamp_velocities(a, drive);
+        }
+    }
+
+    /// Sets the motors' targets and applies the joint efforts of articulation `a`.
+    pub fn apply_inputs(&mut self, a: usize, drives: &[JointDrive], input: &ArticulationInputs<'_>) {
+        let art = &mut self.arts[a];
+        // Current joint axes for the effort torques.
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody_mut(art.multibody)
+            .expect("multibody exists");
+        for d in 0..drives.len() {
+            let drive = &drives[d];
+            let link = mb.link_mut(art.dof_mb_link[d]).expect("link exists");
+            let axis = if art.dof_axis[d] == 3 { JointAxis::AngX } else { JointAxis::LinX };
+            if drive.stiffness > 0.0 || drive.damping > 0.0 {
+                let data = &mut link.joint.data;
+                data.set_motor(axis, input.pos_target[d], input.vel_target[d], drive.stiffness, drive.damping);
+                data.set_motor_model(axis, MotorModel::ForceBased);
+                data.set_motor_max_force(axis, drive.effort_limit.min(f32::MAX));
+            }
+        }
+        for &h in &art.links {
+            let rb = &mut self.world.bodies[h];
+            rb.reset_torques(false);
+            rb.reset_forces(false);
+        }
+        let model = art.kin.model();
+        for d in 0..drives.len() {
+            let tau = input.effort[d].clamp(-drives[d].effort_limit, drives[d].effort_limit);
+            if tau == 0.0 {
+                continue;
+            }
+            let child = art.dof_link[d];
+            let parent = model.links[child].parent.expect("dof link has a parent");
+            let (ch, ph) = (art.links[child], art.links[parent]);
+            let child_rb = &self.world.bodies[ch];
+            let axis_local = model.links[child].joint.as_ref().expect("joint").axis;
+            let axis = child_rb.rotation() * axis_local;
+            if art.dof_axis[d] == 3 {
+                self.world.bodies[ch].add_torque(axis * tau, true);
+                self.world.bodies[ph].add_torque(-axis * tau, true);
+            } else {
+                // Equal and opposite forces along one line of action: the parent also gets the
+                // moment that keeps the pair's net wrench zero.
+                let f = axis * tau;
+                let c_child = self.world.bodies[ch].center_of_mass();
+                let c_parent = self.world.bodies[ph].center_of_mass();
+                self.world.bodies[ch].add_force(f, true);
+                let prb = &mut self.world.bodies[ph];
+                prb.add_force(-f, true);
+                prb.add_torque((c_child - c_parent).cross(f), true);
+            }
+        }
+    }
+
+    fn clamp_velocities(&mut self, a: usize, drives: &[JointDrive]) {
+        if drives.iter().all(|d| d.velocity_limit.is_infinite()) {
+            return;
+        }
+        let art = &self.arts[a];
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody_mut(art.multibody)
+            .expect("multibody exists");
+        for (d, drive) in drives.iter().enumerate() {
+            let id = mb.link(art.dof_mb_link[d]).expect("link exists").assembly_id();
+            let v = &mut mb.generalized_velocity_mut()[id];
+            *v = v.clamp(-drive.velocity_limit, drive.velocity_limit);
+        }
+    }
+
+    /// Sets the mass of a body, scaling its inertia; updates the kinematics copy for links.
+    pub fn set_mass(&mut self, handle: RigidBodyHandle, inertial: &Inertial, mass: f32) -> Inertial {
+        let scale = if inertial.mass > 0.0 { mass / inertial.mass } else { 0.0 };
+        let new = Inertial {
+            mass,
+            com: inertial.com,
+            inertia: inertial.inertia * scale,
+        };
+        self.world.bodies[handle].set_additional_mass_properties(mass_props(&new), true);
+        new
+    }
+
+    /// Sets the friction of every collider of a body.
+    pub fn set_friction(&mut self, handle: RigidBodyHandle, friction: f32) {
+        let colliders: Vec<ColliderHandle> = self.world.bodies[handle].colliders().to_vec();
+        for c in colliders {
+            let col = &mut self.world.colliders[c];
+            col.set_friction(friction);
+            let mut data = col.user_data;
+            data = (data & !0xFFFF_FFFF) | u128::from(friction.to_bits());
+            col.user_data = data;
+        }
+    }
+}
+
+/// Per-env input rows of one articulation.
+pub(crate) struct ArticulationInputs<'a> {
+    pub pos_target: &'a [f32],
+    pub vel_target: &'a [f32],
+    pub effort: &'a [f32],
+}
