@@ -175,8 +175,8 @@ impl ArticulationKinematics {
         self.forward(root, q);
         let links = &self.model.links;
         // Forward pass: velocities and accelerations of link origins (world frame).
-        for i in 0..links.len() {
-            let Some(p) = links[i].parent else {
+        for (i, link) in links.iter().enumerate() {
+            let Some(p) = link.parent else {
                 self.ang_vel[i] = Vec3::ZERO;
                 self.ang_acc[i] = Vec3::ZERO;
                 self.lin_acc[i] = -gravity;
@@ -187,7 +187,7 @@ impl ArticulationKinematics {
             let mut w = wp;
             let mut alpha = ap;
             let mut acc = self.lin_acc[p] + ap.cross(r) + wp.cross(wp.cross(r));
-            if let (Some(d), Some(j)) = (self.link_dof[i], &links[i].joint) {
+            if let (Some(d), Some(j)) = (self.link_dof[i], &link.joint) {
                 let sq = self.axes[i] * qd[d];
                 match j.kind {
                     JointKind::Revolute => {

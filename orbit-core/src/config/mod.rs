@@ -75,7 +75,8 @@ pub fn load_document(path: impl AsRef<Path>, overrides: &[String]) -> Result<Nod
     Ok(document)
 }
 
-/// Deserialises a `T` from a document tree.
+/// Deserialises a `T` from a document tree. Errors about values set by overrides name the
+/// file `<override N>`; [`load`] and [`from_str`] also append the override's text.
 pub fn from_node<T: DeserializeOwned>(node: &Node) -> Result<T, ConfigError> {
     de::from_node(node)
 }

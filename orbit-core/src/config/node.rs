@@ -59,7 +59,7 @@ pub enum NodeKind {
     Unit(String),
     /// `[a, b, c]`.
     List(Vec<Node>),
-    /// `{key: value}`; keys are unique by [`Node::key_text`].
+    /// `{key: value}`; keys are unique (string and identifier keys compare by their text).
     Map(Vec<(Node, Node)>),
     /// A string.
     Str(String),
@@ -114,7 +114,10 @@ pub(crate) fn write_quoted(out: &mut String, s: &str, quote: char) {
 const INDENT: &str = "    ";
 
 impl Node {
-    /// Pretty-prints the tree as RON that parses back to an equal tree.
+    /// Pretty-prints the tree as RON that parses back to an equal tree (spans aside). Used to
+    /// save resolved configs; `#include`s are already merged in. The one shape the parser never
+    /// produces, an empty anonymous struct, prints as `()` and reads back as an empty tuple,
+    /// which deserialises the same way.
     pub fn to_ron(&self) -> String {
         let mut out = String::new();
         self.write_ron(&mut out, 0);

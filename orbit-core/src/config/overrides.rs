@@ -93,6 +93,10 @@ fn set(root: &mut Node, segments: &[Segment], value: Node) -> Result<(), String>
     for (depth, segment) in parents.iter().enumerate() {
         node = node.strip_some_mut();
         if node.slot(segment).is_none() {
+            if let Some(Segment::Index(_)) = segments.get(depth + 1) {
+                let missing = describe_path(&segments[..=depth]);
+                return Err(format!("{missing} does not exist, so it cannot be indexed"));
+            }
             let empty = Node {
                 kind: NodeKind::Struct {
                     name: None,
