@@ -42,8 +42,14 @@ pub fn free_fall(backend: &str) {
             (z_semi_implicit - 1e-5..=z_explicit + 1e-5).contains(&z),
             "free fall height {z} outside [{z_semi_implicit}, {z_explicit}]"
         );
-        assert!((v - v_expected).abs() < 1e-4, "free fall speed {v} vs {v_expected}");
-        assert!(view.pos[e].truncate().length() < 1e-6, "a falling body drifted sideways");
+        assert!(
+            (v - v_expected).abs() < 1e-4,
+            "free fall speed {v} vs {v_expected}"
+        );
+        assert!(
+            view.pos[e].truncate().length() < 1e-6,
+            "a falling body drifted sideways"
+        );
     }
 }
 
@@ -81,7 +87,9 @@ pub fn pendulum_period(backend: &str) {
     assert_eq!(crossings.len(), 6, "pendulum did not swing (angle {prev})");
     let measured = (crossings[5] - crossings[0]) / 5.0;
     let rel = (measured - expected).abs() / expected;
-    println!("pendulum_period[{backend}]: measured {measured:.5} s, expected {expected:.5} s, rel. error {rel:.2e}");
+    println!(
+        "pendulum_period[{backend}]: measured {measured:.5} s, expected {expected:.5} s, rel. error {rel:.2e}"
+    );
     assert!(rel < 3e-3, "pendulum period {measured} s vs {expected} s");
 }
 
@@ -105,7 +113,12 @@ pub fn box_rests_on_table(backend: &str) {
     let v = sim.rigid_object(0);
     let drift = (v.pos[0] - init.pos).length();
     let angle = orbit_core::math::rotation_distance(v.quat[0], init.rot);
-    println!("box_rests_on_table[{backend}]: drift {:.3} mm, rotation {:.3} mrad, final z {:.5}", drift * 1e3, angle * 1e3, v.pos[0].z);
+    println!(
+        "box_rests_on_table[{backend}]: drift {:.3} mm, rotation {:.3} mrad, final z {:.5}",
+        drift * 1e3,
+        angle * 1e3,
+        v.pos[0].z
+    );
     assert!(drift < 1e-3, "resting box drifted {drift} m");
     assert!(angle < 1e-3, "resting box rotated {angle} rad");
 }
@@ -137,14 +150,24 @@ pub fn sliding_box_decelerates_at_mu_g(backend: &str) {
     let decel = (speeds[i0 - 1] - speeds[i1 - 1]) / ((i1 - i0) as f32 * h);
     let expected = mu * G;
     let rel = (decel - expected).abs() / expected;
-    let stop = speeds.iter().position(|v| *v < 1e-3).map(|i| (i + 1) as f32 * h);
+    let stop = speeds
+        .iter()
+        .position(|v| *v < 1e-3)
+        .map(|i| (i + 1) as f32 * h);
     println!(
         "sliding_box[{backend}]: deceleration {decel:.4} m/s² (μg = {expected:.4}), rel. error {rel:.2e}, stopped after {stop:?} s (ideal {:.4} s)",
         1.0 / expected
     );
-    assert!(rel < 0.03, "sliding deceleration {decel} vs μg = {expected}");
+    assert!(
+        rel < 0.03,
+        "sliding deceleration {decel} vs μg = {expected}"
+    );
     let stop = stop.expect("the box never stopped");
-    assert!((stop - 1.0 / expected).abs() < 0.02, "stopping time {stop} s vs {} s", 1.0 / expected);
+    assert!(
+        (stop - 1.0 / expected).abs() < 0.02,
+        "stopping time {stop} s vs {} s",
+        1.0 / expected
+    );
 }
 
 /// Writing a root state to some envs changes only those envs.

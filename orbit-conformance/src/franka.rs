@@ -1,1 +1,351 @@
-//! franka
+//! Checks on the bundled Franka box-pushing scene: forward kinematics against MuJoCo's, holding
+//! a pose under PD + gravity, and tracking MuJoCo rollouts under Fancy Gym's torque law.
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
+use orbit_core::physics::PhysicsBackend;
+use orbit_core::scene::{PerJoint, SceneCfg};
+use serde::Deserialize;
+
+use crate::scenes::{build, resolve};
+
+/// The bundled box-pushing scene config (Franka with push rod, table, box).
+pub fn box_pushing_scene_cfg() -> SceneCfg {
+    orbit_assets::box_pushing_scene_cfg(&[]).unwrap_or_else(|e| panic!("bundled scene: {e}"))
+}
+
+#[derive(Deserialize)]
+struct BodyPose {
+    xpos: [f32; 3],
+    xquat_wxyz: [f32; 4],
+}
+
+#[derive(Deserialize)]
+struct FkVector {
+    q: Vec<f32>,
+    bodies: BTreeMap<String, BodyPose>,
+    rod_tip_site_xpos: [f32; 3],
+}
+
+#[derive(Deserialize)]
+struct FkFile {
+    fk_test_vectors: BTreeMap<String, FkVector>,
+}
+
+/// World pose of a named frame of articulation 0 in env `e`, from the backend's link poses.
+pub fn frame_pose(sim: &dyn PhysicsBackend, e: usize, frame: &str) -> Pose {
+    let layout = &sim.layout().articulations[0];
+    let (link, offset) = layout
+        .model
+        .find_frame(frame)
+        .unwrap_or_else(|| panic!("frame `{frame}` not in the model"));
+    let view = sim.articulation(0);
+    let i = e * layout.num_links() + link;
+    Pose::new(view.link_pos[i], view.link_quat[i]).mul_pose(&offset)
+}
+
+/// After writing the FK test configurations, every body origin is within 1e-4 m and every body
+/// orientation within 1e-4 rad of MuJoCo's, and so is the rod-tip site.
+pub fn franka_forward_kinematics(backend: &str) {
+    let file: FkFile =
+        serde_json::from_str(include_str!("../data/franka_fk_vectors.json")).expect("fk data");
+    let scene = resolve(&box_pushing_scene_cfg());
+    let n = file.fk_test_vectors.len();
+    let mut sim = build(backend, &scene, n, 0.002);
+    let ids: Vec<usize> = (0..n).collect();
+    let q: Vec<f32> = file
+        .fk_test_vectors
+        .values()
+        .flat_map(|v| v.q.clone())
+        .collect();
+    sim.write_joint_state(0, &ids, &q, &vec![0.0; q.len()])
+        .expect("write joint state");
+    let (mut worst_pos, mut worst_rot) = (0.0f32, 0.0f32);
+    for (e, (name, vector)) in file.fk_test_vectors.iter().enumerate() {
+        for (body, expected) in &vector.bodies {
+            let got = frame_pose(sim.as_ref(), e, body);
+            let dp = (got.pos - Vec3::from(expected.xpos)).length();
+            let dr = rotation_distance(got.rot, quat_wxyz(expected.xquat_wxyz));
+            worst_pos = worst_pos.max(dp);
+            worst_rot = worst_rot.max(dr);
+            assert!(dp < 1e-4, "{name}: `{body}` position off by {dp} m");
+            assert!(dr < 1e-4, "{name}: `{body}` orientation off by {dr} rad");
+        }
+        let tip = frame_pose(sim.as_ref(), e, "rod_tip").pos;
+        let dp = (tip - Vec3::from(vector.rod_tip_site_xpos)).length();
+        worst_pos = worst_pos.max(dp);
+        assert!(dp < 1e-4, "{name}: rod tip off by {dp} m");
+    }
+    println!(
+        "franka_forward_kinematics[{backend}]: worst position error {worst_pos:.2e} m, worst orientation error {worst_rot:.2e} rad"
+    );
+}
+
+/// Default arm configuration of the box-pushing task (Fancy Gym's IK result).
+fn q0(scene: &orbit_core::scene::SceneDesc) -> Vec<f32> {
+    scene.articulations[0].default_joint_pos.clone()
+}
+
+/// Franka under implicit PD (k = 400, d = 40, Isaac Lab's high-PD Franka), box moved aside.
+/// With gravity compensation as feed-forward effort it holds the IK pose of the task within
+/// 1e-3 rad over 3 s. Without compensation, started at the raised home pose
+/// `(0, 0, 0, −1.5, 0, 1.5, 0)` (clear of the table), it settles where the drives balance gravity,
+/// `k (q* − q) = g(q)`, to within 1 % of the largest gravity torque.
+pub fn franka_holds_pose_under_pd(backend: &str) {
+    let mut cfg = box_pushing_scene_cfg();
+    // Move the box away from the rod so only the drives and gravity act on the arm.
+    cfg.rigid_objects[0].init_state.pos = Vec3::new(0.6, -0.6, -0.01);
+    for act in cfg.articulations[0].actuators.values_mut() {
+        act.stiffness = PerJoint::All(400.0);
+        act.damping = PerJoint::All(40.0);
+    }
+    let scene = resolve(&cfg);
+    let ik_pose = q0(&scene);
+    let home = [0.0f32, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0];
+    let dofs = ik_pose.len();
+    let mut sim = build(backend, &scene, 2, 0.002);
+    let targets = [ik_pose.clone(), home.to_vec()].concat();
+    sim.write_joint_state(0, &[0, 1], &targets, &vec![0.0; 2 * dofs])
+        .expect("initial state");
+    sim.set_joint_position_targets(0, &targets)
+        .expect("targets");
+    let mut efforts = vec![0.0; 2 * dofs];
+    for _ in 0..1500 {
+        // Env 0: gravity compensation feed-forward; env 1: PD alone.
+        efforts[..dofs].copy_from_slice(&sim.articulation(0).bias_forces[..dofs]);
+        sim.set_joint_efforts(0, &efforts).expect("efforts");
+        sim.step().expect("step");
+    }
+    let view = sim.articulation(0);
+    let err_comp = (0..dofs)
+        .map(|d| (view.joint_pos[d] - ik_pose[d]).abs())
+        .fold(0.0, f32::max);
+    let gravity = &view.bias_forces[dofs..];
+    let g_max = gravity.iter().fold(0.0f32, |m, g| m.max(g.abs()));
+    let balance = (0..dofs)
+        .map(|d| (400.0 * (home[d] - view.joint_pos[dofs + d]) - gravity[d]).abs())
+        .fold(0.0, f32::max);
+    let vel = view.joint_vel.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    println!(
+        "franka_holds_pose[{backend}]: with compensation max |q − q*| = {err_comp:.2e} rad; PD alone: max |k(q*−q) − g(q)| = {balance:.4} N·m (max gravity torque {g_max:.2} N·m), max |q̇| = {vel:.2e}"
+    );
+    assert!(err_comp < 1e-3, "compensated arm drifted {err_comp} rad");
+    assert!(
+        balance < 0.01 * g_max,
+        "PD does not balance gravity: residual {balance} N·m"
+    );
+    assert!(vel < 1e-2, "arm still moving: {vel} rad/s");
+}
+
+#[derive(Deserialize)]
+struct RolloutCase {
+    name: String,
+    controller: String,
+    #[serde(default)]
+    desired_pos: Vec<[f32; 7]>,
+    q: Vec<[f64; 7]>,
+    box_pos: Vec<[f64; 3]>,
+    action: Vec<[f32; 7]>,
+}
+
+#[derive(Deserialize)]
+struct Rollouts {
+    initial_arm_q: [f32; 7],
+    kp: [f32; 7],
+    kd: [f32; 7],
+    torque_scale: f32,
+    torque_max: [f32; 7],
+    cases: Vec<RolloutCase>,
+}
+
+/// Agreement of one rollout case with MuJoCo.
+#[derive(Clone, Debug)]
+pub struct RolloutAgreement {
+    /// Case name.
+    pub name: String,
+    /// RMS joint-position error over all 100 steps and 7 joints (rad).
+    pub joint_rms: f64,
+    /// Largest joint-position error (rad).
+    pub joint_max: f64,
+    /// RMS joint-position error over the steps before the reference box first moves (1 mm),
+    /// i.e. before the rod pushes it (rad).
+    pub joint_rms_before_contact: f64,
+    /// Number of steps before the reference box first moves.
+    pub steps_before_contact: usize,
+    /// Box position error after the last step (m).
+    pub box_final: f64,
+}
+
+/// Replays the MuJoCo reference rollouts (`shared/reference/mujoco_box_pushing_rollouts.json`)
+/// with Fancy Gym's torque law `τ = clip(10 clip(a, −1, 1) + bias, ±τ_max)`, the action either
+/// recorded (`normalized_torque`) or recomputed by the ProMP PD controller from the current state
+/// (`promp_pd`), all cases side by side as envs of one backend. Returns the agreement per case.
+pub fn franka_mujoco_rollouts(backend: &str) -> Vec<RolloutAgreement> {
+    let data: Rollouts =
+        serde_json::from_str(include_str!("../data/mujoco_box_pushing_rollouts.json"))
+            .expect("rollout data");
+    let scene = resolve(&box_pushing_scene_cfg());
+    let n = data.cases.len();
+    let dofs = 7;
+    let mut sim = build(backend, &scene, n, 0.002);
+    let ids: Vec<usize> = (0..n).collect();
+    sim.write_joint_state(0, &ids, &data.initial_arm_q.repeat(n), &vec![0.0; n * dofs])
+        .expect("initial state");
+    let steps = data.cases[0].q.len();
+    let mut sq_err = vec![0.0f64; n];
+    let contact_step: Vec<usize> = data
+        .cases
+        .iter()
+        .map(|c| {
+            let b0 = c.box_pos[0];
+            c.box_pos
+                .iter()
+                .position(|b| ((b[0] - b0[0]).powi(2) + (b[1] - b0[1]).powi(2)).sqrt() > 1e-3)
+                .unwrap_or(c.box_pos.len())
+        })
+        .collect();
+    let mut sq_err_free = vec![0.0f64; n];
+    let mut max_err = vec![0.0f64; n];
+    let mut efforts = vec![0.0f32; n * dofs];
+    for k in 0..steps {
+        let view = sim.articulation(0);
+        for (e, case) in data.cases.iter().enumerate() {
+            for d in 0..dofs {
+                let i = e * dofs + d;
+                let a = if case.controller == "promp_pd" {
+                    let y = &case.desired_pos;
+                    let v = if k + 1 < y.len() {
+                        (y[k + 1][d] - y[k][d]) / 0.02
+                    } else {
+                        (y[k][d] - y[k - 1][d]) / 0.02
+                    };
+                    data.kp[d] * (y[k][d] - view.joint_pos[i])
+                        + data.kd[d] * (v - view.joint_vel[i])
+                } else {
+                    case.action[k][d]
+                };
+                let tau = data.torque_scale * a.clamp(-1.0, 1.0) + view.bias_forces[i];
+                efforts[i] = tau.clamp(-data.torque_max[d], data.torque_max[d]);
+            }
+        }
+        sim.set_joint_efforts(0, &efforts).expect("efforts");
+        for _ in 0..10 {
+            sim.step().expect("step");
+        }
+        let view = sim.articulation(0);
+        if std::env::var("ORBIT_DEBUG_ROLLOUT").is_ok() {
+            let e = n - 1;
+            let err: Vec<String> = (0..dofs)
+                .map(|d| {
+                    format!(
+                        "{:+.4}",
+                        f64::from(view.joint_pos[e * dofs + d]) - data.cases[e].q[k][d]
+                    )
+                })
+                .collect();
+            eprintln!("step {k}: {}", err.join(" "));
+            let qd: Vec<String> = (0..dofs)
+                .map(|d| format!("{:+.4}", view.joint_vel[e * dofs + d]))
+                .collect();
+            eprintln!("   qd {}", qd.join(" "));
+        }
+        for (e, case) in data.cases.iter().enumerate() {
+            for d in 0..dofs {
+                let err = f64::from(view.joint_pos[e * dofs + d]) - case.q[k][d];
+                sq_err[e] += err * err;
+                if k < contact_step[e] {
+                    sq_err_free[e] += err * err;
+                }
+                max_err[e] = max_err[e].max(err.abs());
+            }
+        }
+    }
+    let boxes = sim.rigid_object(0);
+    data.cases
+        .iter()
+        .enumerate()
+        .map(|(e, case)| {
+            let b = case.box_pos[steps - 1];
+            let got = boxes.pos[e];
+            let box_final = ((f64::from(got.x) - b[0]).powi(2) + (f64::from(got.y) - b[1]).powi(2) + (f64::from(got.z) - b[2]).powi(2)).sqrt();
+            let r = RolloutAgreement {
+                name: case.name.clone(),
+                joint_rms: (sq_err[e] / (steps * dofs) as f64).sqrt(),
+                joint_max: max_err[e],
+                joint_rms_before_contact: (sq_err_free[e] / (contact_step[e].max(1) * dofs) as f64).sqrt(),
+                steps_before_contact: contact_step[e],
+                box_final,
+            };
+            println!(
+                "mujoco_rollouts[{backend}] {:<20} joint RMS {:.4} rad, max {:.4} rad, RMS over the {} steps before the rod moves the box {:.4} rad, final box error {:.4} m",
+                r.name, r.joint_rms, r.joint_max, r.steps_before_contact, r.joint_rms_before_contact, r.box_final
+            );
+            r
+        })
+        .collect()
+}
+
+/// Runs the box-pushing scene for 30 env steps with random torques from the per-env RNG and
+/// returns the final joint positions and box poses as raw bytes.
+fn random_torque_run(backend: &str, num_envs: usize, threads: usize, seed: u64) -> Vec<u32> {
+    let scene = resolve(&box_pushing_scene_cfg());
+    let sim_cfg = orbit_core::physics::SimCfg {
+        backend: backend.to_string(),
+        num_threads: threads,
+        ..Default::default()
+    };
+    let mut sim = orbit_core::physics::build_backend(&scene, num_envs, &sim_cfg).expect("build");
+    let dofs = sim.layout().articulations[0].num_dofs();
+    let mut rngs: Vec<_> = (0..num_envs as u32)
+        .map(|e| orbit_core::rng::EnvRng::new(seed, e, orbit_core::rng::streams::POLICY))
+        .collect();
+    let mut efforts = vec![0.0f32; num_envs * dofs];
+    for _ in 0..30 {
+        let bias = sim.articulation(0).bias_forces;
+        for (i, tau) in efforts.iter_mut().enumerate() {
+            *tau = bias[i] + 10.0 * rngs[i / dofs].uniform_range(-1.0, 1.0);
+        }
+        sim.set_joint_efforts(0, &efforts).expect("efforts");
+        for _ in 0..10 {
+            sim.step().expect("step");
+        }
+    }
+    let view = sim.articulation(0);
+    let boxes = sim.rigid_object(0);
+    view.joint_pos
+        .iter()
+        .map(|v| v.to_bits())
+        .chain(
+            boxes
+                .pos
+                .iter()
+                .flat_map(|p| p.to_array())
+                .map(f32::to_bits),
+        )
+        .chain(
+            boxes
+                .quat
+                .iter()
+                .flat_map(|q| q.to_array())
+                .map(f32::to_bits),
+        )
+        .collect()
+}
+
+/// The same seed gives bit-identical states on repeated runs and with 1 or 2 worker threads;
+/// another seed gives a different state.
+pub fn deterministic_runs(backend: &str) {
+    let a = random_torque_run(backend, 4, 1, 7);
+    let b = random_torque_run(backend, 4, 1, 7);
+    let c = random_torque_run(backend, 4, 2, 7);
+    let d = random_torque_run(backend, 4, 1, 8);
+    assert_eq!(a, b, "two runs with the same seed differ");
+    assert_eq!(a, c, "the result depends on the number of worker threads");
+    assert_ne!(a, d, "different seeds gave identical states");
+    println!(
+        "deterministic_runs[{backend}]: {} values bit-identical across runs and thread counts",
+        a.len()
+    );
+}

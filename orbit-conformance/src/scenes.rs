@@ -10,22 +10,25 @@ use orbit_core::scene::{
 
 /// Resolves a scene config whose models are inline or bundled assets.
 pub fn resolve(cfg: &SceneCfg) -> SceneDesc {
-    cfg.resolve(&|src: &AssetSource| match src {
-        AssetSource::Model(m) => Ok(m.clone()),
-        other => Err(format!("unsupported in this build: {other:?}")),
-    })
+    cfg.resolve(&orbit_assets::model_loader(None))
         .unwrap_or_else(|e| panic!("conformance scene does not resolve: {e}"))
 }
 
 /// Builds a backend by name for a scene.
-pub fn build(backend: &str, scene: &SceneDesc, num_envs: usize, dt: f32) -> Box<dyn PhysicsBackend> {
+pub fn build(
+    backend: &str,
+    scene: &SceneDesc,
+    num_envs: usize,
+    dt: f32,
+) -> Box<dyn PhysicsBackend> {
     let sim = SimCfg {
         dt,
         backend: backend.to_string(),
         num_threads: 1,
         ..SimCfg::default()
     };
-    build_backend(scene, num_envs, &sim).unwrap_or_else(|e| panic!("backend `{backend}` failed to build: {e}"))
+    build_backend(scene, num_envs, &sim)
+        .unwrap_or_else(|e| panic!("backend `{backend}` failed to build: {e}"))
 }
 
 /// A box shape with a material.
@@ -51,7 +54,13 @@ pub fn table(top_z: f32, friction: f32) -> StaticObjectCfg {
 }
 
 /// A free solid box of the given mass and half-extents.
-pub fn free_box(name: &str, half: Vec3, mass: f32, friction: f32, init: RootStateCfg) -> RigidObjectCfg {
+pub fn free_box(
+    name: &str,
+    half: Vec3,
+    mass: f32,
+    friction: f32,
+    init: RootStateCfg,
+) -> RigidObjectCfg {
     RigidObjectCfg {
         name: name.into(),
         shapes: vec![box_shape(half, Vec3::ZERO, friction)],

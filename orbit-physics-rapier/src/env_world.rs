@@ -1,6 +1,9 @@
 //! One environment: a rapier world holding the scene's articulations (as reduced-coordinate
 //! multibodies), free rigid objects and static fixtures.
 
+// Dof loops index several parallel per-dof arrays at once; an index reads clearest there.
+#![allow(clippy::needless_range_loop)]
+
 use glam::{Quat, Vec3};
 use orbit_core::kinematics::ArticulationKinematics;
 use orbit_core::math::Pose as OrbitPose;
@@ -31,6 +34,10 @@ pub(crate) struct EnvArticulation {
     pub root: OrbitPose,
     /// This env's published state.
     pub out: ArticulationRow,
+    /// Passive joint damping of each dof (the drive's damping is added while it is active).
+    pub joint_damping: Vec<f32>,
+    /// Explicit effort applied to each dof in the current step.
+    pub effort: Vec<f32>,
 }
 
 /// One env's published state of one articulation.
@@ -82,8 +89,13 @@ fn collider_for(shape: &Shape) -> ColliderBuilder {
         Geometry::Capsule {
             radius,
             half_length,
-        } => (ColliderBuilder::capsule_z(half_length, radius), Quat::IDENTITY),
-        Geometry::Box { half_extents: h } => (ColliderBuilder::cuboid(h.x, h.y, h.z), Quat::IDENTITY),
+        } => (
+            ColliderBuilder::capsule_z(half_length, radius),
+            Quat::IDENTITY,
+        ),
+        Geometry::Box { half_extents: h } => {
+            (ColliderBuilder::cuboid(h.x, h.y, h.z), Quat::IDENTITY)
+        }
         Geometry::Cylinder {
             radius,
             half_length,
@@ -125,7 +137,12 @@ fn add_shapes(world: &mut PhysicsWorld, body: RigidBodyHandle, shapes: &[Shape])
     }
 }
 
-fn add_body(world: &mut PhysicsWorld, model: &RigidBodyModel, pose: &OrbitPose, dynamic: bool) -> RigidBodyHandle {
+fn add_body(
+    world: &mut PhysicsWorld,
+    model: &RigidBodyModel,
+    pose: &OrbitPose,
+    dynamic: bool,
+) -> RigidBodyHandle {
     let builder = if dynamic {
         RigidBodyBuilder::dynamic().additional_mass_properties(mass_props(&model.inertial))
     } else {
@@ -140,7 +157,12 @@ fn add_body(world: &mut PhysicsWorld, model: &RigidBodyModel, pose: &OrbitPose, 
 
 /// The joint between a link and its parent, as a rapier generic joint. Rapier's revolute and
 /// prismatic joints move about/along the joint frame's x axis.
-fn rapier_joint(origin: &OrbitPose, axis: Vec3, kind: JointKind, limits: Option<[f32; 2]>) -> GenericJoint {
+fn rapier_joint(
+    origin: &OrbitPose,
+    axis: Vec3,
+    kind: JointKind,
+    limits: Option<[f32; 2]>,
+) -> GenericJoint {
     let x_to_axis = Quat::from_rotation_arc(Vec3::X, axis.normalize());
     let locked = match kind {
         JointKind::Revolute => JointAxesMask::LOCKED_REVOLUTE_AXES,
@@ -167,7 +189,9 @@ fn build_articulation(
 ) -> Result<EnvArticulation, PhysicsError> {
     let model = &desc.model;
     let mut kin = ArticulationKinematics::new(model);
-    let poses = kin.forward(&desc.root_pose, &desc.default_joint_pos).to_vec();
+    let poses = kin
+        .forward(&desc.root_pose, &desc.default_joint_pos)
+        .to_vec();
     let mut links = Vec::with_capacity(model.links.len());
     for (i, link) in model.links.iter().enumerate() {
         let body = RigidBodyModel {
@@ -200,7 +224,10 @@ fn build_articulation(
             .insert(links[parent], links[i], gj, false)
             .ok_or_else(|| PhysicsError::Unsupported {
                 backend: "rapier".into(),
-                reason: format!("could not add joint `{}` of `{}` to a multibody", joint.name, desc.name),
+                reason: format!(
+                    "could not add joint `{}` of `{}` to a multibody",
+                    joint.name, desc.name
+                ),
             })?;
         let (mb, link_id) = world
             .multibody_joints
@@ -215,13 +242,20 @@ fn build_articulation(
         multibody = Some(index);
         if joint.kind != JointKind::Fixed {
             dof_mb_link.push(link_id);
-            dof_axis.push(if joint.kind == JointKind::Revolute { 3 } else { 0 });
+            dof_axis.push(if joint.kind == JointKind::Revolute {
+                3
+            } else {
+                0
+            });
             dof_link.push(i);
         }
     }
     let multibody = multibody.ok_or_else(|| PhysicsError::Unsupported {
         backend: "rapier".into(),
-        reason: format!("articulation `{}` has a single link; use a static or rigid object", desc.name),
+        reason: format!(
+            "articulation `{}` has a single link; use a static or rigid object",
+            desc.name
+        ),
     })?;
     let mb = world
         .multibody_joints
@@ -239,6 +273,10 @@ fn build_articulation(
     }
     let n_links = model.links.len();
     let n_dofs = dof_link.len();
+    let joint_damping = dof_link
+        .iter()
+        .map(|&l| model.links[l].joint.as_ref().map_or(0.0, |j| j.damping))
+        .collect();
     Ok(EnvArticulation {
         links,
         multibody,
@@ -248,6 +286,8 @@ fn build_articulation(
         kin,
         root: desc.root_pose,
         out: ArticulationRow::new(n_dofs, n_links),
+        joint_damping,
+        effort: vec![0.0; n_dofs],
     })
 }
 
@@ -288,7 +328,13 @@ impl EnvWorld {
     /// Refreshes the published state of articulation `a` from the simulation: joint state,
     /// link poses and velocities (from the joint state), bias forces and the applied-effort
     /// estimate `clip(k (q* − q) + d (q̇* − q̇) + τ_ff)`.
-    pub fn publish(&mut self, a: usize, gravity: Vec3, drives: &[JointDrive], input: &ArticulationInputs<'_>) {
+    pub fn publish(
+        &mut self,
+        a: usize,
+        gravity: Vec3,
+        drives: &[JointDrive],
+        input: &ArticulationInputs<'_>,
+    ) {
         let art = &mut self.arts[a];
         let mb = self
             .world
@@ -307,9 +353,11 @@ impl EnvWorld {
                 + input.effort[d];
             out.applied[d] = tau.clamp(-dr.effort_limit, dr.effort_limit);
         }
-        art.kin.bias_forces(&art.root, &out.q, &out.qd, gravity, &mut out.bias);
+        art.kin
+            .bias_forces(&art.root, &out.q, &out.qd, gravity, &mut out.bias);
         // `bias_forces` ran forward kinematics on the current state.
-        art.kin.link_velocities(&out.qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
+        art.kin
+            .link_velocities(&out.qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
         let poses = art.kin.forward(&art.root, &out.q);
         for (l, p) in poses.iter().enumerate() {
             out.link_pos[l] = p.pos;
@@ -334,7 +382,10 @@ impl EnvWorld {
         }
         mb.apply_displacements(&disp[..n]);
         for d in 0..q.len() {
-            let id = mb.link(art.dof_mb_link[d]).expect("link exists").assembly_id();
+            let id = mb
+                .link(art.dof_mb_link[d])
+                .expect("link exists")
+                .assembly_id();
             mb.generalized_velocity_mut()[id] = qd[d];
         }
         mb.forward_kinematics(&self.world.bodies, false);
@@ -343,12 +394,16 @@ impl EnvWorld {
         let art = &mut self.arts[a];
         art.kin.forward(&art.root, q);
         let out = &mut art.out;
-        art.kin.link_velocities(qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
+        art.kin
+            .link_velocities(qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
         for (l, &h) in art.links.iter().enumerate().skip(1) {
             let rb = &mut self.world.bodies[h];
             let origin = rb.position().translation;
             let com = rb.center_of_mass();
-            rb.set_linvel(out.link_lin_vel[l] + out.link_ang_vel[l].cross(com - origin), true);
+            rb.set_linvel(
+                out.link_lin_vel[l] + out.link_ang_vel[l].cross(com - origin),
+                true,
+            );
             rb.set_angvel(out.link_ang_vel[l], true);
         }
     }
@@ -385,24 +440,51 @@ impl EnvWorld {
     }
 
     /// Sets the motors' targets and applies the joint efforts of articulation `a`.
-    pub fn apply_inputs(&mut self, a: usize, drives: &[JointDrive], input: &ArticulationInputs<'_>) {
+    pub fn apply_inputs(
+        &mut self,
+        a: usize,
+        drives: &[JointDrive],
+        input: &ArticulationInputs<'_>,
+    ) {
         let art = &mut self.arts[a];
-        // Current joint axes for the effort torques.
         let mb = self
             .world
             .multibody_joints
             .get_multibody_mut(art.multibody)
             .expect("multibody exists");
+        // Implicit PD: while the drive effort stays within its limit, it is a joint spring of
+        // stiffness k at rest position q* plus damping d, both integrated implicitly by the
+        // multibody (`M + h d + h² k` on the diagonal), and the explicit effort d q̇* completes
+        // d (q̇* − q̇⁺). A drive that would exceed its limit is replaced by the saturated effort.
         for d in 0..drives.len() {
             let drive = &drives[d];
-            let link = mb.link_mut(art.dof_mb_link[d]).expect("link exists");
-            let axis = if art.dof_axis[d] == 3 { JointAxis::AngX } else { JointAxis::LinX };
+            let id = mb
+                .link(art.dof_mb_link[d])
+                .expect("link exists")
+                .assembly_id();
+            let mut effort = input.effort[d];
+            let (mut k, mut q_rest, mut damping) = (0.0, 0.0, art.joint_damping[d]);
             if drive.stiffness > 0.0 || drive.damping > 0.0 {
-                let data = &mut link.joint.data;
-                data.set_motor(axis, input.pos_target[d], input.vel_target[d], drive.stiffness, drive.damping);
-                data.set_motor_model(axis, MotorModel::ForceBased);
-                data.set_motor_max_force(axis, drive.effort_limit.min(f32::MAX));
+                let q = mb
+                    .link(art.dof_mb_link[d])
+                    .expect("link exists")
+                    .joint()
+                    .coords()[art.dof_axis[d]];
+                let v = mb.generalized_velocity()[id];
+                let pd = drive.stiffness * (input.pos_target[d] - q)
+                    + drive.damping * (input.vel_target[d] - v);
+                if (pd + effort).abs() <= drive.effort_limit {
+                    (k, q_rest) = (drive.stiffness, input.pos_target[d]);
+                    damping += drive.damping;
+                    effort += drive.damping * input.vel_target[d];
+                } else {
+                    effort += pd;
+                }
             }
+            art.effort[d] = effort.clamp(-drive.effort_limit, drive.effort_limit);
+            mb.damping_mut()[id] = damping;
+            let link = mb.link_mut(art.dof_mb_link[d]).expect("link exists");
+            link.joint.set_spring(art.dof_axis[d], k, q_rest);
         }
         for &h in &art.links {
             let rb = &mut self.world.bodies[h];
@@ -411,7 +493,7 @@ impl EnvWorld {
         }
         let model = art.kin.model();
         for d in 0..drives.len() {
-            let tau = input.effort[d].clamp(-drives[d].effort_limit, drives[d].effort_limit);
+            let tau = art.effort[d];
             if tau == 0.0 {
                 continue;
             }
@@ -449,15 +531,27 @@ impl EnvWorld {
             .get_multibody_mut(art.multibody)
             .expect("multibody exists");
         for (d, drive) in drives.iter().enumerate() {
-            let id = mb.link(art.dof_mb_link[d]).expect("link exists").assembly_id();
+            let id = mb
+                .link(art.dof_mb_link[d])
+                .expect("link exists")
+                .assembly_id();
             let v = &mut mb.generalized_velocity_mut()[id];
             *v = v.clamp(-drive.velocity_limit, drive.velocity_limit);
         }
     }
 
     /// Sets the mass of a body, scaling its inertia; updates the kinematics copy for links.
-    pub fn set_mass(&mut self, handle: RigidBodyHandle, inertial: &Inertial, mass: f32) -> Inertial {
-        let scale = if inertial.mass > 0.0 { mass / inertial.mass } else { 0.0 };
+    pub fn set_mass(
+        &mut self,
+        handle: RigidBodyHandle,
+        inertial: &Inertial,
+        mass: f32,
+    ) -> Inertial {
+        let scale = if inertial.mass > 0.0 {
+            mass / inertial.mass
+        } else {
+            0.0
+        };
         let new = Inertial {
             mass,
             com: inertial.com,

@@ -3,10 +3,9 @@
 //! are rigid bodies; fixtures are fixed bodies.
 //!
 //! Physical model (see `docs/physics.md`):
-//! - implicit PD drives are rapier's force-based joint motors: with stiffness `k`, damping `d`
-//!   and step `h`, the motor is a soft velocity constraint whose impulse is
-//!   `h [k (q* − q⁺) + d (q̇* − q̇⁺)]`, evaluated at the end of the step (implicit), and bounded
-//!   by `h · effort_limit`;
+//! - implicit PD drives are the multibody's implicit joint springs and damping
+//!   (`M + h d + h² k` on the mass-matrix diagonal, solved directly), switched to the saturated
+//!   effort when the drive would exceed its effort limit;
 //! - joint efforts are equal and opposite torques on a joint's two links, which the multibody
 //!   maps to exactly the generalized force on that joint;
 //! - velocity limits clamp the joint speed after each step (PhysX's max joint velocity);
@@ -80,7 +79,9 @@ impl RapierBackend {
     pub fn new(scene: &SceneDesc, num_envs: usize, sim: &SimCfg) -> Result<Self, PhysicsError> {
         sim.validate()?;
         if num_envs == 0 {
-            return Err(PhysicsError::InvalidInput("num_envs must be at least 1".into()));
+            return Err(PhysicsError::InvalidInput(
+                "num_envs must be at least 1".into(),
+            ));
         }
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(sim.num_threads)
@@ -102,7 +103,13 @@ impl RapierBackend {
                     dofs,
                     links,
                     drives: a.drives.clone(),
-                    inertials: a.model.links.iter().map(|l| l.inertial).collect::<Vec<_>>().repeat(num_envs),
+                    inertials: a
+                        .model
+                        .links
+                        .iter()
+                        .map(|l| l.inertial)
+                        .collect::<Vec<_>>()
+                        .repeat(num_envs),
                     pos_target: tile(&a.default_joint_pos),
                     vel_target: vec![0.0; num_envs * dofs],
                     effort: vec![0.0; num_envs * dofs],
@@ -142,7 +149,10 @@ impl RapierBackend {
     }
 
     /// Input rows of env `e` for every articulation (no allocation: fixed-size array).
-    fn inputs_of<'a>(arts: &'a [ArticulationBuffers], e: usize) -> impl Iterator<Item = ArticulationInputs<'a>> {
+    fn inputs_of<'a>(
+        arts: &'a [ArticulationBuffers],
+        e: usize,
+    ) -> impl Iterator<Item = ArticulationInputs<'a>> {
         arts.iter().map(move |b| {
             let r = e * b.dofs..(e + 1) * b.dofs;
             ArticulationInputs {
@@ -164,7 +174,11 @@ impl RapierBackend {
             }
         };
         if env_ids.len() == envs.len() {
-            self.pool.install(|| envs.par_iter_mut().enumerate().for_each(|(e, env)| refresh(e, env)));
+            self.pool.install(|| {
+                envs.par_iter_mut()
+                    .enumerate()
+                    .for_each(|(e, env)| refresh(e, env))
+            });
         } else {
             for &e in env_ids {
                 refresh(e, &mut envs[e]);
@@ -312,11 +326,19 @@ impl PhysicsBackend for RapierBackend {
         }
     }
 
-    fn set_joint_position_targets(&mut self, a: usize, targets: &[f32]) -> Result<(), PhysicsError> {
+    fn set_joint_position_targets(
+        &mut self,
+        a: usize,
+        targets: &[f32],
+    ) -> Result<(), PhysicsError> {
         self.set_inputs(a, "joint position targets", targets, |b| &mut b.pos_target)
     }
 
-    fn set_joint_velocity_targets(&mut self, a: usize, targets: &[f32]) -> Result<(), PhysicsError> {
+    fn set_joint_velocity_targets(
+        &mut self,
+        a: usize,
+        targets: &[f32],
+    ) -> Result<(), PhysicsError> {
         self.set_inputs(a, "joint velocity targets", targets, |b| &mut b.vel_target)
     }
 
@@ -359,7 +381,10 @@ impl PhysicsBackend for RapierBackend {
             )));
         }
         for s in states {
-            let finite = s.pose.pos.is_finite() && s.pose.rot.is_finite() && s.lin_vel.is_finite() && s.ang_vel.is_finite();
+            let finite = s.pose.pos.is_finite()
+                && s.pose.rot.is_finite()
+                && s.lin_vel.is_finite()
+                && s.ang_vel.is_finite();
             if !finite || (s.pose.rot.length() - 1.0).abs() > 1e-3 {
                 return Err(PhysicsError::InvalidInput(format!(
                     "root state {s:?} must be finite with a unit quaternion"
@@ -373,12 +398,19 @@ impl PhysicsBackend for RapierBackend {
         Ok(())
     }
 
-    fn set_masses(&mut self, body: BodyRef, env_ids: &[usize], masses: &[f32]) -> Result<(), PhysicsError> {
+    fn set_masses(
+        &mut self,
+        body: BodyRef,
+        env_ids: &[usize],
+        masses: &[f32],
+    ) -> Result<(), PhysicsError> {
         self.body_handle(body)?;
         check_env_ids(env_ids, self.envs.len())?;
         check_batch("masses", masses, env_ids.len(), 1)?;
         if let Some(m) = masses.iter().find(|m| **m <= 0.0) {
-            return Err(PhysicsError::InvalidInput(format!("masses must be > 0, got {m}")));
+            return Err(PhysicsError::InvalidInput(format!(
+                "masses must be > 0, got {m}"
+            )));
         }
         for (&e, &m) in env_ids.iter().zip(masses) {
             match body {
@@ -401,12 +433,19 @@ impl PhysicsBackend for RapierBackend {
         Ok(())
     }
 
-    fn set_friction(&mut self, body: BodyRef, env_ids: &[usize], friction: &[f32]) -> Result<(), PhysicsError> {
+    fn set_friction(
+        &mut self,
+        body: BodyRef,
+        env_ids: &[usize],
+        friction: &[f32],
+    ) -> Result<(), PhysicsError> {
         self.body_handle(body)?;
         check_env_ids(env_ids, self.envs.len())?;
         check_batch("friction", friction, env_ids.len(), 1)?;
         if let Some(f) = friction.iter().find(|f| **f < 0.0) {
-            return Err(PhysicsError::InvalidInput(format!("friction must be >= 0, got {f}")));
+            return Err(PhysicsError::InvalidInput(format!(
+                "friction must be >= 0, got {f}"
+            )));
         }
         for (&e, &f) in env_ids.iter().zip(friction) {
             let env = &mut self.envs[e];

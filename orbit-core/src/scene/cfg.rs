@@ -122,7 +122,8 @@ pub struct ActuatorCfg {
     /// Maximum drive effort; defaults to the asset's limit, else unlimited.
     #[serde(default)]
     pub effort_limit: Option<PerJoint>,
-    /// Maximum joint speed enforced by the engine; defaults to the asset's limit, else unlimited.
+    /// Maximum joint speed enforced by the engine; unlimited unless given (the asset's declared
+    /// velocity limit is informational, as in Isaac Lab 1.0's implicit actuators).
     #[serde(default)]
     pub velocity_limit: Option<PerJoint>,
     /// Armature override.

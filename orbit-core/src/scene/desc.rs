@@ -372,8 +372,10 @@ fn resolve_articulation(
     };
     let mut drives: Vec<JointDrive> = (0..n)
         .map(|i| JointDrive {
+            // As Isaac Lab 1.0 does for implicit actuators: the asset's effort limit is enforced
+            // unless the actuator overrides it; its velocity limit is not (only an explicit
+            // `velocity_limit` in the actuator group is).
             effort_limit: asset_joint(i).effort_limit.unwrap_or(f32::INFINITY),
-            velocity_limit: asset_joint(i).velocity_limit.unwrap_or(f32::INFINITY),
             ..JointDrive::default()
         })
         .collect();
