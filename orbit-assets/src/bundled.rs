@@ -54,14 +54,22 @@ pub fn box_pushing_scene_cfg(overrides: &[String]) -> Result<SceneCfg, ConfigErr
 /// applied to its config first.
 pub fn box_pushing_scene(overrides: &[String]) -> Result<SceneDesc, AssetError> {
     let cfg = box_pushing_scene_cfg(overrides)?;
-    Ok(cfg.resolve(&model_loader(None))?)
+    cfg.resolve(&model_loader(None))
+        .map_err(|source| AssetError::Scene {
+            file: "box_pushing_scene.ron (bundled)".into(),
+            source,
+        })
 }
 
 /// Loads a scene config from a RON file (with includes and overrides) and resolves it; URDF
 /// paths in it are relative to the file's directory, falling back to bundled assets.
 pub fn load_scene(path: &Path, overrides: &[String]) -> Result<SceneDesc, AssetError> {
     let cfg: SceneCfg = orbit_core::config::load(path, overrides)?;
-    Ok(cfg.resolve(&model_loader(path.parent()))?)
+    cfg.resolve(&model_loader(path.parent()))
+        .map_err(|source| AssetError::Scene {
+            file: path.display().to_string(),
+            source,
+        })
 }
 
 /// Loads an articulation model from its source.

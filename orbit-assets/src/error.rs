@@ -10,8 +10,13 @@ pub enum AssetError {
     #[error(transparent)]
     Config(#[from] orbit_core::config::ConfigError),
     /// A scene config is well-formed but does not resolve (unknown joints, bad values, ...).
-    #[error(transparent)]
-    Scene(#[from] orbit_core::scene::SceneError),
+    #[error("{file}: {source}")]
+    Scene {
+        /// The scene config file.
+        file: String,
+        /// What does not resolve, with the field path.
+        source: orbit_core::scene::SceneError,
+    },
     /// The file could not be read.
     #[error("cannot read `{file}`: {source}")]
     Io {

@@ -6,6 +6,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// A rigid transform: rotation followed by translation (`x_parent = rot * x_child + pos`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Pose {
     /// Translation in metres.
     #[serde(default = "zero_vec")]

@@ -75,6 +75,18 @@ pub fn load_document(path: impl AsRef<Path>, overrides: &[String]) -> Result<Nod
     Ok(document)
 }
 
+/// Parses RON `text` (called `file_name` in errors) into a merged document tree, with includes
+/// resolved relative to the current directory and `overrides` applied.
+pub fn parse_document(
+    text: &str,
+    file_name: &str,
+    overrides: &[String],
+) -> Result<Node, ConfigError> {
+    let mut document = include::load_text(text, file_name)?;
+    overrides::apply(&mut document, overrides)?;
+    Ok(document)
+}
+
 /// Deserialises a `T` from a document tree. Errors about values set by overrides name the
 /// file `<override N>`; [`load`] and [`from_str`] also append the override's text.
 pub fn from_node<T: DeserializeOwned>(node: &Node) -> Result<T, ConfigError> {

@@ -15,6 +15,7 @@ use crate::scene::RootState;
 
 /// Simulation settings (Isaac Lab `SimulationCfg`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SimCfg {
     /// Physics time step in seconds.
     #[serde(default = "default_dt")]

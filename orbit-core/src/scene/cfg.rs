@@ -11,6 +11,7 @@ use super::model::{ArticulationModel, Inertial, Shape};
 
 /// A scene: the entities cloned into every environment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SceneCfg {
     /// Distance between neighbouring env origins on the clone grid (metres).
     #[serde(default = "default_spacing")]
@@ -32,6 +33,7 @@ fn default_spacing() -> f32 {
 
 /// Where an articulation's model comes from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum AssetSource {
     /// A URDF file: a bundled asset name or a path relative to the config file.
     Urdf {
@@ -44,6 +46,7 @@ pub enum AssetSource {
 
 /// An articulated asset (Isaac Lab `ArticulationCfg`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ArticulationCfg {
     /// Entity name used by terms (`"robot"`).
     pub name: String,
@@ -69,6 +72,7 @@ fn yes() -> bool {
 
 /// Initial state of an articulation; joint values are given per joint-name regex.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ArticulationInitState {
     /// Root position relative to the env origin.
     #[serde(default)]
@@ -112,6 +116,7 @@ pub enum PerJoint {
 /// An implicit actuator group (Isaac Lab `ImplicitActuatorCfg`): the physics engine applies
 /// `τ = k (q* − q) + d (q̇* − q̇) + τ_ff`, integrated implicitly, clipped to the effort limit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ActuatorCfg {
     /// Regexes selecting the joints (full match).
     pub joint_names_expr: Vec<String>,
@@ -136,6 +141,7 @@ pub struct ActuatorCfg {
 
 /// A free rigid object (Isaac Lab `RigidObjectCfg`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RigidObjectCfg {
     /// Entity name (`"object"`, `"box"`).
     pub name: String,
@@ -155,6 +161,7 @@ pub struct RigidObjectCfg {
 
 /// A root state: pose and velocities (Isaac Lab's 13-value `default_root_state`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RootStateCfg {
     /// Position relative to the env origin.
     #[serde(default)]
@@ -183,6 +190,7 @@ impl Default for RootStateCfg {
 
 /// A static fixture (Isaac Lab `AssetBaseCfg` with a collision spawner).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StaticObjectCfg {
     /// Entity name.
     pub name: String,

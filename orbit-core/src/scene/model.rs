@@ -9,6 +9,7 @@ use crate::math::{Pose, rotate_inertia, skew};
 
 /// Primitive collision geometry. Capsules and cylinders are aligned with their local z axis.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Geometry {
     /// A sphere of the given radius.
     Sphere {
@@ -85,6 +86,7 @@ impl Geometry {
 /// Surface properties of a shape. A contact takes the friction of the shape with the higher
 /// `priority`, or the larger friction when priorities are equal (MuJoCo's mixing rule).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Material {
     /// Coulomb sliding friction coefficient.
     pub friction: f32,
@@ -120,6 +122,7 @@ impl Material {
 /// Bitmask collision filtering: two shapes touch when each one's `groups` intersects the
 /// other's `mask`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CollisionFilter {
     /// Groups this shape belongs to.
     pub groups: u32,
@@ -145,6 +148,7 @@ impl CollisionFilter {
 
 /// A collision shape attached to a body.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Shape {
     /// The geometry.
     pub geometry: Geometry,
@@ -162,6 +166,7 @@ pub struct Shape {
 /// Mass properties of a body: mass, centre of mass and the full inertia tensor about the
 /// centre of mass, expressed in the body frame axes.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Inertial {
     /// Mass in kg.
     pub mass: f32,
@@ -242,6 +247,7 @@ impl Inertial {
 
 /// The kind of a joint connecting a link to its parent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum JointKind {
     /// One rotational degree of freedom about `axis`.
     Revolute,
@@ -253,6 +259,7 @@ pub enum JointKind {
 
 /// The joint that attaches a link to its parent link.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Joint {
     /// Joint name (unique within the articulation).
     pub name: String,
@@ -331,6 +338,7 @@ impl Joint {
 
 /// A named frame rigidly attached to a link (a MuJoCo site, a URDF link merged away, a tcp).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Frame {
     /// Frame name.
     pub name: String,
@@ -340,6 +348,7 @@ pub struct Frame {
 
 /// A rigid link of an articulation.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Link {
     /// Link name (unique within the articulation).
     pub name: String,
@@ -359,6 +368,7 @@ pub struct Link {
 
 /// A tree of links joined by joints. Links are stored parent-before-child; link 0 is the root.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ArticulationModel {
     /// Model name.
     pub name: String,
@@ -561,6 +571,7 @@ impl ArticulationModel {
 
 /// A single rigid body (a free object or a static fixture): mass properties and shapes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RigidBodyModel {
     /// Body name.
     pub name: String,
