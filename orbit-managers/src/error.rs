@@ -1,0 +1,41 @@
+//! Errors of environment construction and stepping.
+
+use orbit_core::config::ConfigError;
+use orbit_core::physics::PhysicsError;
+
+/// Errors raised while building or stepping a manager-based environment.
+#[derive(Debug, thiserror::Error)]
+pub enum EnvError {
+    /// The config file is malformed (file:line:col, field path, expectation in the message).
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// The scene or its assets do not resolve.
+    #[error(transparent)]
+    Asset(#[from] orbit_assets::AssetError),
+    /// The physics backend refused an operation.
+    #[error(transparent)]
+    Physics(#[from] PhysicsError),
+    /// A term name that no crate registered.
+    #[error("{field}: no {kind} term named `{name}`; registered {kind} terms: {available:?}")]
+    UnknownTerm {
+        /// Config field of the term.
+        field: String,
+        /// Term kind ("observation", "reward", ...).
+        kind: &'static str,
+        /// Requested name.
+        name: String,
+        /// Registered names.
+        available: Vec<String>,
+    },
+    /// A term's parameters or scene references are invalid.
+    #[error("{field}: {message}")]
+    InvalidTerm {
+        /// Config field of the term.
+        field: String,
+        /// What is wrong and what is expected.
+        message: String,
+    },
+    /// An action batch of the wrong shape or with non-finite values.
+    #[error("invalid action: {0}")]
+    InvalidAction(String),
+}

@@ -1,0 +1,508 @@
+//! The managers: each owns its terms (built from the config in order) and their buffers.
+
+use std::collections::BTreeMap;
+
+use orbit_core::config::{Node, node_at};
+
+use crate::cfg::{EventMode, NoiseCfg, RlEnvCfg};
+use crate::env::{EnvRngs, EnvView};
+use crate::error::EnvError;
+use crate::scene::Scene;
+use crate::term::*;
+
+/// Builds the context of the term at `section.name` (its `params` node looked up in `doc`).
+pub(crate) fn context<'a>(
+    doc: &'a Node,
+    scene: &'a Scene,
+    cfg: &RlEnvCfg,
+    field: String,
+) -> TermContext<'a> {
+    let params = node_at(doc, &format!("{field}.params"));
+    TermContext {
+        field,
+        params,
+        scene,
+        decimation: cfg.decimation,
+        step_dt: cfg.sim.dt * cfg.decimation as f32,
+        action_dim: 0,
+        command_dims: Vec::new(),
+    }
+}
+
+/// Splits the policy action among action terms; keeps the current and previous actions.
+pub struct ActionManager {
+    pub(crate) terms: Vec<(String, Box<dyn ActionTerm>)>,
+    pub(crate) dim: usize,
+    pub(crate) action: Vec<f32>,
+    pub(crate) prev_action: Vec<f32>,
+    scratch: Vec<f32>,
+}
+
+impl ActionManager {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+        let mut terms = Vec::new();
+        for (name, t) in &cfg.actions.0 {
+            let ctx = context(doc, scene, cfg, format!("actions.{name}"));
+            terms.push((name.clone(), build_action(&t.func, &ctx)?));
+        }
+        let dim = terms.iter().map(|(_, t)| t.dim()).sum();
+        let n = scene.num_envs();
+        Ok(Self {
+            terms,
+            dim,
+            action: vec![0.0; n * dim],
+            prev_action: vec![0.0; n * dim],
+            scratch: Vec::new(),
+        })
+    }
+
+    /// Total action dimension.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    pub(crate) fn process(&mut self, scene: &Scene, actions: &[f32]) -> Result<(), EnvError> {
+        let n = scene.num_envs();
+        if actions.len() != n * self.dim {
+            return Err(EnvError::InvalidAction(format!(
+                "expected {n} × {} = {} values, got {}",
+                self.dim,
+                n * self.dim,
+                actions.len()
+            )));
+        }
+        if let Some(i) = actions.iter().position(|a| !a.is_finite()) {
+            return Err(EnvError::InvalidAction(format!(
+                "value {} of env {} (action index {}) is not finite; nothing was applied",
+                actions[i],
+                i / self.dim,
+                i % self.dim
+            )));
+        }
+        std::mem::swap(&mut self.prev_action, &mut self.action);
+        self.action.copy_from_slice(actions);
+        let mut offset = 0;
+        for (_, term) in &mut self.terms {
+            let d = term.dim();
+            self.scratch.clear();
+            for e in 0..n {
+                self.scratch
+                    .extend_from_slice(&actions[e * self.dim + offset..e * self.dim + offset + d]);
+            }
+            term.process(scene, &self.scratch);
+            offset += d;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn apply(&mut self, scene: &mut Scene) -> Result<(), EnvError> {
+        for (_, term) in &mut self.terms {
+            term.apply(scene)?;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn reset(&mut self, env_ids: &[usize]) {
+        for &e in env_ids {
+            self.action[e * self.dim..(e + 1) * self.dim].fill(0.0);
+            self.prev_action[e * self.dim..(e + 1) * self.dim].fill(0.0);
+        }
+        for (_, term) in &mut self.terms {
+            term.reset(env_ids);
+        }
+    }
+
+    /// The processed actions of a term by name.
+    pub fn processed(&self, name: &str) -> Option<&[f32]> {
+        self.terms
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| t.processed())
+    }
+}
+
+struct ObsTerm {
+    term: Box<dyn ObservationTerm>,
+    noise: Option<NoiseCfg>,
+    clip: Option<(f32, f32)>,
+    scale: Option<f32>,
+    buf: Vec<f32>,
+}
+
+/// One observation group: its terms and the concatenated output.
+pub struct ObservationGroup {
+    /// Group name.
+    pub name: String,
+    terms: Vec<ObsTerm>,
+    /// Values per env.
+    pub dim: usize,
+    /// Concatenated observations, `num_envs × dim`.
+    pub values: Vec<f32>,
+}
+
+/// Computes observation groups: per term `func`, then noise, clip, scale; concatenated.
+pub struct ObservationManager {
+    pub(crate) groups: Vec<ObservationGroup>,
+}
+
+impl ObservationManager {
+    pub(crate) fn new(
+        doc: &Node,
+        scene: &Scene,
+        cfg: &RlEnvCfg,
+        action_dim: usize,
+        commands: &CommandManager,
+    ) -> Result<Self, EnvError> {
+        let n = scene.num_envs();
+        let mut groups = Vec::new();
+        for (gname, g) in &cfg.observations.0 {
+            let mut terms = Vec::new();
+            for (tname, t) in &g.terms.0 {
+                let mut ctx = context(
+                    doc,
+                    scene,
+                    cfg,
+                    format!("observations.{gname}.terms.{tname}"),
+                );
+                ctx.action_dim = action_dim;
+                ctx.command_dims = commands
+                    .terms
+                    .iter()
+                    .map(|c| (c.name.clone(), c.term.dim()))
+                    .collect();
+                let term = build_observation(&t.func, &ctx)?;
+                let d = term.dim();
+                terms.push(ObsTerm {
+                    term,
+                    noise: if g.enable_corruption { t.noise } else { None },
+                    clip: t.clip,
+                    scale: t.scale,
+                    buf: vec![0.0; n * d],
+                });
+            }
+            let dim = terms.iter().map(|t| t.term.dim()).sum();
+            groups.push(ObservationGroup {
+                name: gname.clone(),
+                terms,
+                dim,
+                values: vec![0.0; n * dim],
+            });
+        }
+        Ok(Self { groups })
+    }
+
+    pub(crate) fn compute(&mut self, env: &EnvView<'_>, noise: &mut EnvRngs) {
+        let n = env.scene.num_envs();
+        for g in &mut self.groups {
+            let mut offset = 0;
+            for t in &mut g.terms {
+                let d = t.term.dim();
+                t.term.compute(env, &mut t.buf);
+                for e in 0..n {
+                    let rng = noise.get(e);
+                    for v in &mut t.buf[e * d..(e + 1) * d] {
+                        *v += match t.noise {
+                            Some(NoiseCfg::Uniform { n_min, n_max }) => {
+                                rng.uniform_range(n_min, n_max)
+                            }
+                            Some(NoiseCfg::Gaussian { mean, std }) => mean + std * rng.normal(),
+                            None => 0.0,
+                        };
+                        if let Some((lo, hi)) = t.clip {
+                            *v = v.clamp(lo, hi);
+                        }
+                        if let Some(s) = t.scale {
+                            *v *= s;
+                        }
+                    }
+                    g.values[e * g.dim + offset..e * g.dim + offset + d]
+                        .copy_from_slice(&t.buf[e * d..(e + 1) * d]);
+                }
+                offset += d;
+            }
+        }
+    }
+}
+
+/// Sums weighted reward terms times `step_dt`; keeps per-term episode sums.
+pub struct RewardManager {
+    terms: Vec<(String, f32, Box<dyn RewardTerm>)>,
+    buf: Vec<f32>,
+    pub(crate) episode_sums: Vec<Vec<f32>>,
+}
+
+impl RewardManager {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+        let mut terms = Vec::new();
+        for (name, t) in &cfg.rewards.0 {
+            if !t.weight.is_finite() {
+                return Err(EnvError::InvalidTerm {
+                    field: format!("rewards.{name}.weight"),
+                    message: format!("expected a finite weight, got {}", t.weight),
+                });
+            }
+            if t.weight == 0.0 {
+                continue;
+            }
+            let ctx = context(doc, scene, cfg, format!("rewards.{name}"));
+            terms.push((name.clone(), t.weight, build_reward(&t.func, &ctx)?));
+        }
+        let n = scene.num_envs();
+        let sums = vec![vec![0.0; n]; terms.len()];
+        Ok(Self {
+            terms,
+            buf: vec![0.0; n],
+            episode_sums: sums,
+        })
+    }
+
+    pub(crate) fn compute(&mut self, env: &EnvView<'_>, dt: f32, reward: &mut [f32]) {
+        reward.fill(0.0);
+        for (k, (_, weight, term)) in self.terms.iter_mut().enumerate() {
+            term.compute(env, &mut self.buf);
+            for (e, r) in reward.iter_mut().enumerate() {
+                let v = self.buf[e] * *weight * dt;
+                *r += v;
+                self.episode_sums[k][e] += v;
+            }
+        }
+    }
+
+    pub(crate) fn reset(
+        &mut self,
+        env_ids: &[usize],
+        episode_s: f32,
+        log: &mut BTreeMap<String, f32>,
+    ) {
+        for (k, (name, _, _)) in self.terms.iter().enumerate() {
+            let mean = env_ids
+                .iter()
+                .map(|&e| self.episode_sums[k][e])
+                .sum::<f32>()
+                / env_ids.len().max(1) as f32;
+            log.insert(format!("Episode Reward/{name}"), mean / episode_s);
+            for &e in env_ids {
+                self.episode_sums[k][e] = 0.0;
+            }
+        }
+    }
+}
+
+/// A termination term with its flags of the last step.
+struct TerminationEntry {
+    name: String,
+    time_out: bool,
+    term: Box<dyn TerminationTerm>,
+    values: Vec<bool>,
+}
+
+/// Evaluates termination terms into terminated / time-out flags.
+pub struct TerminationManager {
+    terms: Vec<TerminationEntry>,
+}
+
+impl TerminationManager {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+        let n = scene.num_envs();
+        let mut terms = Vec::new();
+        for (name, t) in &cfg.terminations.0 {
+            let ctx = context(doc, scene, cfg, format!("terminations.{name}"));
+            terms.push(TerminationEntry {
+                name: name.clone(),
+                time_out: t.time_out,
+                term: build_termination(&t.func, &ctx)?,
+                values: vec![false; n],
+            });
+        }
+        Ok(Self { terms })
+    }
+
+    pub(crate) fn compute(
+        &mut self,
+        env: &EnvView<'_>,
+        terminated: &mut [bool],
+        time_outs: &mut [bool],
+    ) {
+        terminated.fill(false);
+        time_outs.fill(false);
+        for entry in &mut self.terms {
+            entry.term.compute(env, &mut entry.values);
+            let target = if entry.time_out {
+                &mut *time_outs
+            } else {
+                &mut *terminated
+            };
+            for (t, v) in target.iter_mut().zip(entry.values.iter()) {
+                *t |= *v;
+            }
+        }
+    }
+
+    pub(crate) fn reset(&self, env_ids: &[usize], log: &mut BTreeMap<String, f32>) {
+        for entry in &self.terms {
+            let count = env_ids.iter().filter(|&&e| entry.values[e]).count();
+            log.insert(format!("Episode Termination/{}", entry.name), count as f32);
+        }
+    }
+}
+
+/// An event term with its mode and per-env interval timers.
+struct EventEntry {
+    mode: EventMode,
+    interval: Option<(f32, f32)>,
+    term: Box<dyn EventTerm>,
+    time_left: Vec<f32>,
+}
+
+/// Applies event terms by mode.
+pub struct EventManager {
+    terms: Vec<EventEntry>,
+}
+
+impl EventManager {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+        let n = scene.num_envs();
+        let mut terms = Vec::new();
+        for (name, t) in &cfg.events.0 {
+            let ctx = context(doc, scene, cfg, format!("events.{name}"));
+            if t.mode == EventMode::Interval && t.interval_range_s.is_none() {
+                return Err(ctx.error("interval events need `interval_range_s: Some((lo, hi))`"));
+            }
+            terms.push(EventEntry {
+                mode: t.mode,
+                interval: t.interval_range_s,
+                term: build_event(&t.func, &ctx)?,
+                time_left: vec![0.0; n],
+            });
+        }
+        Ok(Self { terms })
+    }
+
+    pub(crate) fn apply(
+        &mut self,
+        mode: EventMode,
+        scene: &mut Scene,
+        env_ids: &[usize],
+        rngs: &mut EnvRngs,
+    ) -> Result<(), EnvError> {
+        for entry in &mut self.terms {
+            if entry.mode == mode {
+                entry.term.apply(scene, env_ids, rngs)?;
+            }
+        }
+        Ok(())
+    }
+
+    pub(crate) fn init_intervals(&mut self, rngs: &mut EnvRngs) {
+        for entry in &mut self.terms {
+            if let Some((lo, hi)) = entry.interval {
+                for (e, t) in entry.time_left.iter_mut().enumerate() {
+                    *t = rngs.get(e).uniform_range(lo, hi);
+                }
+            }
+        }
+    }
+
+    pub(crate) fn apply_interval(
+        &mut self,
+        scene: &mut Scene,
+        dt: f32,
+        rngs: &mut EnvRngs,
+    ) -> Result<(), EnvError> {
+        for entry in &mut self.terms {
+            let (EventMode::Interval, Some((lo, hi))) = (entry.mode, entry.interval) else {
+                continue;
+            };
+            let mut due = Vec::new();
+            for (e, t) in entry.time_left.iter_mut().enumerate() {
+                *t -= dt;
+                if *t <= 0.0 {
+                    *t = rngs.get(e).uniform_range(lo, hi);
+                    due.push(e);
+                }
+            }
+            if !due.is_empty() {
+                entry.term.apply(scene, &due, rngs)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A command term with its resampling range and per-env timers.
+pub(crate) struct CommandEntry {
+    pub(crate) name: String,
+    range: (f32, f32),
+    pub(crate) term: Box<dyn CommandTerm>,
+    time_left: Vec<f32>,
+}
+
+/// Holds command terms and their resampling timers.
+pub struct CommandManager {
+    pub(crate) terms: Vec<CommandEntry>,
+}
+
+impl CommandManager {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+        let n = scene.num_envs();
+        let mut terms = Vec::new();
+        for (name, t) in &cfg.commands.0 {
+            let ctx = context(doc, scene, cfg, format!("commands.{name}"));
+            let (lo, hi) = t.resampling_time_range;
+            if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+                return Err(ctx.error(format!(
+                    "resampling_time_range must satisfy 0 < lo <= hi, got ({lo}, {hi})"
+                )));
+            }
+            terms.push(CommandEntry {
+                name: name.clone(),
+                range: t.resampling_time_range,
+                term: build_command(&t.func, &ctx)?,
+                time_left: vec![0.0; n],
+            });
+        }
+        Ok(Self { terms })
+    }
+
+    /// The command of a term by name (`num_envs × dim`) and its dim.
+    pub fn command(&self, name: &str) -> Option<(&[f32], usize)> {
+        self.terms
+            .iter()
+            .find(|c| c.name == name)
+            .map(|c| (c.term.command(), c.term.dim()))
+    }
+
+    /// Term names.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.terms.iter().map(|c| c.name.as_str())
+    }
+
+    fn resample(term: &mut CommandEntry, scene: &Scene, env_ids: &[usize], rngs: &mut EnvRngs) {
+        let (lo, hi) = term.range;
+        for &e in env_ids {
+            term.time_left[e] = rngs.get(e).uniform_range(lo, hi);
+        }
+        term.term.resample(scene, env_ids, rngs);
+    }
+
+    pub(crate) fn reset(&mut self, scene: &Scene, env_ids: &[usize], rngs: &mut EnvRngs) {
+        for t in &mut self.terms {
+            Self::resample(t, scene, env_ids, rngs);
+        }
+    }
+
+    pub(crate) fn compute(&mut self, scene: &Scene, dt: f32, rngs: &mut EnvRngs) {
+        for t in &mut self.terms {
+            let mut due = Vec::new();
+            for (e, left) in t.time_left.iter_mut().enumerate() {
+                *left -= dt;
+                if *left <= 0.0 {
+                    due.push(e);
+                }
+            }
+            if !due.is_empty() {
+                Self::resample(t, scene, &due, rngs);
+            }
+        }
+    }
+}

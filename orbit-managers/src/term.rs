@@ -1,0 +1,163 @@
+//! Terms and their registries. A term is a value built once from its config (typed parameters
+//! deserialised from RON, scene names resolved) and then called once per step for all envs.
+//! Crates register term builders by name with `inventory::submit!`.
+
+use orbit_core::config::{Node, from_node};
+use serde::de::DeserializeOwned;
+
+use crate::env::EnvView;
+use crate::error::EnvError;
+use crate::scene::Scene;
+
+/// What a term builder gets: its parameters, its config field path and the scene.
+pub struct TermContext<'a> {
+    /// Field path of the term in the config (for errors), e.g. `rewards.distance`.
+    pub field: String,
+    /// The term's `params` node, if given.
+    pub params: Option<&'a Node>,
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Physics steps per env step.
+    pub decimation: usize,
+    /// Env step duration in seconds.
+    pub step_dt: f32,
+    /// Total action dimension (known once the action manager is built).
+    pub action_dim: usize,
+    /// Command terms and their dimensions (known once the command manager is built).
+    pub command_dims: Vec<(String, usize)>,
+}
+
+impl TermContext<'_> {
+    /// Deserialises the parameters (absent parameters give `P::default()`).
+    pub fn params<P: DeserializeOwned + Default>(&self) -> Result<P, EnvError> {
+        match self.params {
+            None => Ok(P::default()),
+            Some(node) => from_node(node).map_err(|e| EnvError::InvalidTerm {
+                field: format!("{}.params", self.field),
+                message: e.to_string(),
+            }),
+        }
+    }
+
+    /// An error about this term.
+    pub fn error(&self, message: impl Into<String>) -> EnvError {
+        EnvError::InvalidTerm {
+            field: self.field.clone(),
+            message: message.into(),
+        }
+    }
+}
+
+/// An observation term: writes `num_envs × dim` values.
+pub trait ObservationTerm: Send {
+    /// Values per env.
+    fn dim(&self) -> usize;
+    /// Computes the term for all envs into `out` (row-major, `num_envs × dim`).
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]);
+}
+
+/// A reward term: writes one value per env (before weight and `step_dt`).
+pub trait RewardTerm: Send {
+    /// Computes the term for all envs.
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]);
+}
+
+/// A termination term: writes one flag per env.
+pub trait TerminationTerm: Send {
+    /// Computes the term for all envs.
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [bool]);
+}
+
+/// An action term: turns its slice of the policy action into backend inputs.
+pub trait ActionTerm: Send {
+    /// Action values per env.
+    fn dim(&self) -> usize;
+    /// Processes the raw actions (`num_envs × dim`), once per env step.
+    fn process(&mut self, scene: &Scene, raw: &[f32]);
+    /// Writes targets/efforts to the backend, before every physics step.
+    fn apply(&mut self, scene: &mut Scene) -> Result<(), EnvError>;
+    /// Clears per-env state of the listed envs.
+    fn reset(&mut self, _env_ids: &[usize]) {}
+    /// Processed actions, `num_envs × dim` (e.g. the commanded torques).
+    fn processed(&self) -> &[f32];
+}
+
+/// An event term, applied to a set of envs.
+pub trait EventTerm: Send {
+    /// Applies the event to the listed envs; `rng` yields each env's random stream.
+    fn apply(
+        &mut self,
+        scene: &mut Scene,
+        env_ids: &[usize],
+        rng: &mut crate::env::EnvRngs,
+    ) -> Result<(), EnvError>;
+}
+
+/// A command term: a per-env command vector resampled on reset and on a timer.
+pub trait CommandTerm: Send {
+    /// Command values per env.
+    fn dim(&self) -> usize;
+    /// The commands, `num_envs × dim`.
+    fn command(&self) -> &[f32];
+    /// Draws new commands for the listed envs.
+    fn resample(&mut self, scene: &Scene, env_ids: &[usize], rng: &mut crate::env::EnvRngs);
+}
+
+macro_rules! registry {
+    ($(#[$m:meta])* $def:ident, $term:ident, $kind:literal, $list:ident, $build:ident) => {
+        $(#[$m])*
+        pub struct $def {
+            /// Name used in configs.
+            pub name: &'static str,
+            /// Builds the term.
+            pub build: fn(&TermContext<'_>) -> Result<Box<dyn $term>, EnvError>,
+        }
+        inventory::collect!($def);
+
+        /// Registered names of this kind, sorted.
+        pub fn $list() -> Vec<String> {
+            let mut v: Vec<String> = inventory::iter::<$def>.into_iter().map(|d| d.name.to_string()).collect();
+            v.sort();
+            v
+        }
+
+        /// Builds the term registered under `name`.
+        pub fn $build(name: &str, ctx: &TermContext<'_>) -> Result<Box<dyn $term>, EnvError> {
+            let def = inventory::iter::<$def>
+                .into_iter()
+                .find(|d| d.name == name)
+                .ok_or_else(|| EnvError::UnknownTerm {
+                    field: format!("{}.func", ctx.field),
+                    kind: $kind,
+                    name: name.to_string(),
+                    available: $list(),
+                })?;
+            (def.build)(ctx)
+        }
+    };
+}
+
+registry!(
+    /// Registration of an observation term.
+    ObservationTermDef, ObservationTerm, "observation", observation_terms, build_observation
+);
+registry!(
+    /// Registration of a reward term.
+    RewardTermDef, RewardTerm, "reward", reward_terms, build_reward
+);
+registry!(
+    /// Registration of a termination term.
+    TerminationTermDef, TerminationTerm, "termination", termination_terms, build_termination
+);
+registry!(
+    /// Registration of an action term.
+    ActionTermDef, ActionTerm, "action", action_terms, build_action
+);
+registry!(
+    /// Registration of an event term.
+    EventTermDef, EventTerm, "event", event_terms, build_event
+);
+registry!(
+    /// Registration of a command term.
+    CommandTermDef, CommandTerm, "command", command_terms, build_command
+);

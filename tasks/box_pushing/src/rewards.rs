@@ -1,0 +1,240 @@
+//! Fancy Gym's box-pushing reward terms (spec §5.1), each returning the per-step quantity that
+//! the config weights: distances and angles are positive, penalties come from negative weights.
+
+use glam::{Quat, Vec3};
+use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
+use orbit_managers::term::{RewardTerm, RewardTermDef, TermContext};
+use orbit_managers::{EnvError, EnvView};
+use serde::Deserialize;
+
+/// Scene names the box-pushing terms refer to.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxPushingParams {
+    /// The robot articulation.
+    #[serde(default = "robot")]
+    pub robot: String,
+    /// The pushed object.
+    #[serde(default = "box_name")]
+    pub object: String,
+    /// The target command.
+    #[serde(default = "target")]
+    pub command: String,
+    /// Frame at the rod tip.
+    #[serde(default = "rod_tip")]
+    pub rod_tip: String,
+    /// Frame whose orientation is the rod's.
+    #[serde(default = "push_rod")]
+    pub rod: String,
+    /// Action term whose processed values are the commanded torques `u`.
+    #[serde(default = "arm")]
+    pub action: String,
+}
+
+fn robot() -> String {
+    "robot".into()
+}
+fn box_name() -> String {
+    "box".into()
+}
+fn target() -> String {
+    "target".into()
+}
+fn rod_tip() -> String {
+    "rod_tip".into()
+}
+fn push_rod() -> String {
+    "push_rod".into()
+}
+fn arm() -> String {
+    "arm".into()
+}
+
+impl Default for BoxPushingParams {
+    fn default() -> Self {
+        Self {
+            robot: robot(),
+            object: box_name(),
+            command: target(),
+            rod_tip: rod_tip(),
+            rod: push_rod(),
+            action: arm(),
+        }
+    }
+}
+
+/// Resolved scene indices shared by the terms.
+#[derive(Clone)]
+struct Refs {
+    robot: usize,
+    links: usize,
+    object: usize,
+    command: String,
+    rod_tip: (usize, Pose),
+    rod: (usize, Pose),
+    action: String,
+}
+
+impl Refs {
+    fn resolve(ctx: &TermContext<'_>) -> Result<Self, EnvError> {
+        let p: BoxPushingParams = ctx.params()?;
+        let f = |s: &str| format!("{}.params.{s}", ctx.field);
+        let robot = ctx.scene.articulation(&f("robot"), &p.robot)?;
+        Ok(Self {
+            robot,
+            links: ctx.scene.backend.layout().articulations[robot].num_links(),
+            object: ctx.scene.rigid_object(&f("object"), &p.object)?,
+            command: p.command,
+            rod_tip: ctx.scene.frame(&f("rod_tip"), robot, &p.rod_tip)?,
+            rod: ctx.scene.frame(&f("rod"), robot, &p.rod)?,
+            action: p.action,
+        })
+    }
+
+    fn frame(&self, env: &EnvView<'_>, e: usize, (link, offset): (usize, Pose)) -> Pose {
+        let v = env.scene.backend.articulation(self.robot);
+        let i = e * self.links + link;
+        Pose::new(v.link_pos[i], v.link_quat[i]).mul_pose(&offset)
+    }
+
+    fn target(&self, env: &EnvView<'_>, e: usize) -> (Vec3, Quat) {
+        let (cmd, _) = env.commands.command(&self.command).expect("command exists");
+        let c = &cmd[e * 7..(e + 1) * 7];
+        (
+            Vec3::new(c[0], c[1], c[2]),
+            quat_wxyz([c[3], c[4], c[5], c[6]]),
+        )
+    }
+}
+
+/// The quantity a box-pushing reward term computes.
+#[derive(Clone, Copy)]
+enum Quantity {
+    /// `clip(‖p_box − p_rodtip‖, 0.05, 100)`.
+    RodTipDistance,
+    /// `‖p_box − p_target‖`.
+    GoalDistance,
+    /// `rotdist(q_box, q_target) / π`.
+    GoalRotation,
+    /// `rotdist(q_rod, (0,1,0,0)) / π` when above π/4, else 0.
+    RodInclination,
+    /// `Σ u²` of the action term's processed values.
+    Energy,
+}
+
+struct BoxPushingTerm {
+    refs: Refs,
+    quantity: Quantity,
+}
+
+impl RewardTerm for BoxPushingTerm {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let objects = env.scene.backend.rigid_object(self.refs.object);
+        let processed = env.actions.processed(&self.refs.action);
+        let down = Quat::from_xyzw(1.0, 0.0, 0.0, 0.0);
+        for (e, o) in out.iter_mut().enumerate() {
+            *o = match self.quantity {
+                Quantity::RodTipDistance => {
+                    let tip = self.refs.frame(env, e, self.refs.rod_tip).pos;
+                    (objects.pos[e] - tip).length().clamp(0.05, 100.0)
+                }
+                Quantity::GoalDistance => (objects.pos[e] - self.refs.target(env, e).0).length(),
+                Quantity::GoalRotation => {
+                    rotation_distance(objects.quat[e], self.refs.target(env, e).1)
+                        / std::f32::consts::PI
+                }
+                Quantity::RodInclination => {
+                    let phi = rotation_distance(self.refs.frame(env, e, self.refs.rod).rot, down);
+                    if phi > std::f32::consts::FRAC_PI_4 {
+                        phi / std::f32::consts::PI
+                    } else {
+                        0.0
+                    }
+                }
+                Quantity::Energy => processed.map_or(0.0, |u| {
+                    let d = u.len() / out_len(env);
+                    u[e * d..(e + 1) * d].iter().map(|x| x * x).sum()
+                }),
+            };
+        }
+    }
+}
+
+fn out_len(env: &EnvView<'_>) -> usize {
+    env.scene.num_envs()
+}
+
+fn term(ctx: &TermContext<'_>, quantity: Quantity) -> Result<Box<dyn RewardTerm>, EnvError> {
+    Ok(Box::new(BoxPushingTerm {
+        refs: Refs::resolve(ctx)?,
+        quantity,
+    }))
+}
+
+inventory::submit! { RewardTermDef { name: "rod_tip_box_distance", build: |c| term(c, Quantity::RodTipDistance) } }
+inventory::submit! { RewardTermDef { name: "box_goal_distance", build: |c| term(c, Quantity::GoalDistance) } }
+inventory::submit! { RewardTermDef { name: "box_goal_rotation", build: |c| term(c, Quantity::GoalRotation) } }
+inventory::submit! { RewardTermDef { name: "rod_inclination", build: |c| term(c, Quantity::RodInclination) } }
+inventory::submit! { RewardTermDef { name: "action_energy", build: |c| term(c, Quantity::Energy) } }
+
+/// Parameters of `joint_limit_violation`: Fancy Gym's limits (spec §2.5).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointLimitParams {
+    /// The robot articulation.
+    #[serde(default = "robot")]
+    pub robot: String,
+    /// Lower position limits.
+    pub q_min: Vec<f32>,
+    /// Upper position limits.
+    pub q_max: Vec<f32>,
+    /// Speed limits.
+    pub qd_max: Vec<f32>,
+}
+
+impl Default for JointLimitParams {
+    fn default() -> Self {
+        Self {
+            robot: robot(),
+            q_min: Vec::new(),
+            q_max: Vec::new(),
+            qd_max: Vec::new(),
+        }
+    }
+}
+
+/// Fancy Gym's joint-limit penalty magnitude:
+/// `|Σ_{q > q_max}(q − q_max)| + |Σ_{q < q_min}(q_min − q)| + |Σ_{|q̇| > q̇_max}(|q̇| − q̇_max)|`.
+struct JointLimitViolation {
+    robot: usize,
+    p: JointLimitParams,
+}
+
+impl RewardTerm for JointLimitViolation {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let v = env.scene.backend.articulation(self.robot);
+        let n = self.p.q_min.len();
+        for (e, o) in out.iter_mut().enumerate() {
+            let (q, qd) = (
+                &v.joint_pos[e * n..(e + 1) * n],
+                &v.joint_vel[e * n..(e + 1) * n],
+            );
+            let above: f32 = (0..n).map(|i| (q[i] - self.p.q_max[i]).max(0.0)).sum();
+            let below: f32 = (0..n).map(|i| (self.p.q_min[i] - q[i]).max(0.0)).sum();
+            let fast: f32 = (0..n)
+                .map(|i| (qd[i].abs() - self.p.qd_max[i]).max(0.0))
+                .sum();
+            *o = above + below + fast;
+        }
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "joint_limit_violation", build: |c| {
+    let p: JointLimitParams = c.params()?;
+    let robot = c.scene.articulation(&format!("{}.params.robot", c.field), &p.robot)?;
+    let dofs = c.scene.backend.layout().articulations[robot].num_dofs();
+    if p.q_min.len() != dofs || p.q_max.len() != dofs || p.qd_max.len() != dofs {
+        return Err(c.error(format!("q_min, q_max and qd_max need {dofs} values each")));
+    }
+    Ok(Box::new(JointLimitViolation { robot, p }))
+} } }

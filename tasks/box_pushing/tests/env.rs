@@ -1,0 +1,205 @@
+//! The box-pushing env on the CPU backend: Fancy Gym's reference return, episode timing,
+//! partial resets, invalid actions and config errors.
+
+use orbit_managers::{EnvError, ManagerBasedRlEnv, make};
+use orbit_physics_rapier as _;
+use orbit_task_box_pushing as _;
+
+const TASK: &str = "BoxPushing-Torque-Franka-v0";
+
+/// Fancy Gym's seed-0 target (spec §5.5).
+const SEED0_TARGET: &str = "commands.target.params.fixed=Some([0.4910885062, -0.2071919576, -0.01, 0.0518997707, 0.0, 0.0, 0.9986522988])";
+
+fn env(num_envs: usize, extra: &[&str]) -> ManagerBasedRlEnv {
+    let mut overrides = vec![format!("num_envs={num_envs}")];
+    overrides.extend(extra.iter().map(|s| s.to_string()));
+    make(TASK, &overrides).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Zero action for a whole episode from the default reset and the seed-0 target: Fancy Gym's
+/// Dense return is −194.5184 (MuJoCo); we must agree within 1 %. The episode times out at
+/// exactly step 100 and the observation returned then belongs to the new episode.
+#[test]
+fn zero_action_dense_return_matches_fancy_gym() {
+    let mut env = env(1, &[SEED0_TARGET]);
+    env.reset().unwrap();
+    let zero = vec![0.0; env.action_dim()];
+    let mut ret = 0.0f64;
+    for step in 1..=100 {
+        let r = env.step(&zero).unwrap();
+        ret += f64::from(r.reward[0]);
+        assert_eq!(r.time_outs[0], step == 100, "time-out flag at step {step}");
+        assert!(!r.terminated[0]);
+    }
+    let expected = -194.5184247;
+    let rel = (ret - expected).abs() / expected.abs();
+    println!("zero-action Dense return {ret:.4} vs Fancy Gym {expected} (rel. error {rel:.2e})");
+    assert!(rel < 0.01, "Dense return {ret} vs {expected}");
+    assert_eq!(
+        env.episode_length()[0],
+        0,
+        "the env reset after the time-out"
+    );
+}
+
+/// Resetting some envs leaves the others bit-identical to an untouched run.
+#[test]
+fn partial_reset_leaves_other_envs_untouched() {
+    let mut a = env(3, &[]);
+    let mut b = env(3, &[]);
+    a.reset().unwrap();
+    b.reset().unwrap();
+    let act: Vec<f32> = (0..3 * a.action_dim())
+        .map(|i| ((i * 7919) % 13) as f32 / 13.0 - 0.5)
+        .collect();
+    for k in 0..20 {
+        a.step(&act).unwrap();
+        b.step(&act).unwrap();
+        if k == 9 {
+            a.reset_idx(&[1]).unwrap();
+        }
+    }
+    let (oa, d) = a.observation("policy").unwrap();
+    let (ob, _) = b.observation("policy").unwrap();
+    for e in [0, 2] {
+        let (ra, rb) = (&oa[e * d..(e + 1) * d], &ob[e * d..(e + 1) * d]);
+        assert!(
+            ra.iter().zip(rb).all(|(x, y)| x.to_bits() == y.to_bits()),
+            "env {e} changed"
+        );
+    }
+    assert_ne!(&oa[d..2 * d], &ob[d..2 * d], "env 1 was reset");
+}
+
+/// NaN or infinite actions are rejected before anything reaches the physics.
+#[test]
+fn non_finite_actions_are_rejected() {
+    let mut env = env(2, &[]);
+    env.reset().unwrap();
+    let before = env.observation("policy").unwrap().0.to_vec();
+    let mut act = vec![0.0; 2 * env.action_dim()];
+    act[3] = f32::NAN;
+    match env.step(&act) {
+        Err(EnvError::InvalidAction(m)) => assert!(m.contains("not finite"), "{m}"),
+        _ => panic!("a NaN action was accepted"),
+    }
+    act[3] = f32::INFINITY;
+    assert!(env.step(&act).is_err());
+    assert!(env.step(&[0.0; 3]).is_err(), "wrong length accepted");
+    assert_eq!(env.observation("policy").unwrap().0, before.as_slice());
+}
+
+/// Config mistakes name the file and the field.
+#[test]
+fn config_errors_name_file_and_field() {
+    let unknown = make(
+        TASK,
+        &["rewards.goal_distance.func=\"box_goal_distanse\"".into()],
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(unknown.contains("rewards.goal_distance.func"), "{unknown}");
+    assert!(unknown.contains("box_goal_distanse"), "{unknown}");
+    let wrong_type = make(TASK, &["rewards.goal_distance.weight=\"heavy\"".into()])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        wrong_type.contains("rewards.goal_distance.weight"),
+        "{wrong_type}"
+    );
+    let bad_regex = make(
+        TASK,
+        &["actions.arm.params.joint_names=[\"finger.*\"]".into()],
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(
+        bad_regex.contains("actions.arm.params.joint_names"),
+        "{bad_regex}"
+    );
+    assert!(bad_regex.contains("matches no joint"), "{bad_regex}");
+    let bad_param = make(
+        TASK,
+        &["rewards.rod_tip_box.params=(robbot: \"robot\")".into()],
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(
+        bad_param.contains("rewards.rod_tip_box.params"),
+        "{bad_param}"
+    );
+    assert!(bad_param.contains("robbot"), "{bad_param}");
+}
+
+/// Observation layout: joint pos/vel (7 + 7), box pose (3 + 4), target (7), last action (7).
+#[test]
+fn observation_layout() {
+    let mut env = env(1, &[SEED0_TARGET]);
+    env.reset().unwrap();
+    let (obs, d) = env.observation("policy").unwrap();
+    assert_eq!(d, 35);
+    assert!(
+        (obs[0] - 0.387_068_06).abs() < 1e-6,
+        "joint 1 starts at the IK pose"
+    );
+    assert!(
+        (obs[14] - 0.4).abs() < 1e-6 && (obs[15] - 0.3).abs() < 1e-6,
+        "box at its default pose"
+    );
+    assert!((obs[21] - 0.491_088_5).abs() < 1e-6, "target x");
+    assert!(
+        obs[28..].iter().all(|a| *a == 0.0),
+        "last action is zero after reset"
+    );
+}
+
+/// Isaac Lab's step order: at a time-out the reward is computed on the terminal state, then the
+/// env resets, and the returned observation is the first of the new episode (default joint
+/// state, zero last action), while the episode's reward sum is logged.
+#[test]
+fn time_out_step_returns_the_new_episodes_observation() {
+    let mut env = env(1, &[]);
+    env.reset().unwrap();
+    let act: Vec<f32> = (0..env.action_dim())
+        .map(|i| if i % 2 == 0 { 0.5 } else { -0.5 })
+        .collect();
+    for _ in 0..99 {
+        env.step(&act).unwrap();
+    }
+    let moved = env.observation("policy").unwrap().0[..7].to_vec();
+    let r = env.step(&act).unwrap();
+    assert!(r.time_outs[0]);
+    assert!(r.reward[0] < 0.0, "the terminal step still has its reward");
+    let log = &r.extras.log;
+    assert!(log.contains_key("Episode Reward/goal_distance"), "{log:?}");
+    assert_eq!(log["Episode Termination/time_out"], 1.0);
+    let (obs, _) = env.observation("policy").unwrap();
+    let q0 = [
+        0.387_068_06f32,
+        0.176_208_42,
+        0.249_891_42,
+        -2.399_143_8,
+        -0.079_869_05,
+        2.568_573_7,
+        1.479_516_9,
+    ];
+    for j in 0..7 {
+        assert!(
+            (obs[j] - q0[j]).abs() < 1e-5,
+            "joint {j}: {} is not the reset pose",
+            obs[j]
+        );
+    }
+    assert!(
+        moved.iter().zip(q0).any(|(m, q)| (m - q).abs() > 1e-2),
+        "the arm had moved before the reset"
+    );
+    assert!(
+        obs[28..].iter().all(|a| *a == 0.0),
+        "last action is cleared on reset"
+    );
+}
