@@ -6,4 +6,43 @@
 
 pub use orbit_assets as assets;
 pub use orbit_core as core;
+pub use orbit_managers as managers;
 pub use orbit_physics_rapier as physics_rapier;
+pub use orbit_task_box_pushing as task_box_pushing;
+
+/// Builds a registered task (`BoxPushing-Torque-Franka-v0`, …) with config overrides; linking
+/// this crate registers every built-in backend and task.
+pub fn make(
+    task: &str,
+    overrides: &[String],
+) -> Result<managers::ManagerBasedRlEnv, managers::EnvError> {
+    // Reference the backend and task crates so their registrations are linked in.
+    let _ = (
+        physics_rapier::BACKEND_NAME,
+        task_box_pushing::SUCCESS_DISTANCE,
+    );
+    managers::make(task, overrides)
+}
+
+/// Common command-line flags of the examples (Isaac Lab's names), turned into overrides.
+pub fn run_overrides(
+    num_envs: Option<usize>,
+    seed: Option<u64>,
+    backend: Option<&str>,
+    extra: &[String],
+) -> Vec<String> {
+    let mut o = Vec::new();
+    if let Some(n) = num_envs {
+        o.push(format!("num_envs={n}"));
+    }
+    if let Some(s) = seed {
+        o.push(format!("seed={s}"));
+    }
+    if let Some(b) = backend {
+        o.push(format!("sim.backend=\"{b}\""));
+    }
+    o.extend(extra.iter().cloned());
+    o
+}
+
+pub mod agent;

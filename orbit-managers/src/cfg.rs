@@ -38,11 +38,15 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Terms<T> {
     }
 }
 
-/// Where the scene comes from.
+/// Where the scene comes from: a bundled scene config plus overrides of its fields.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum SceneSource {
+#[serde(deny_unknown_fields)]
+pub struct SceneSource {
     /// A bundled scene config (`orbit_assets::bundled`), e.g. `"box_pushing_scene.ron"`.
-    Bundled(String),
+    pub bundled: String,
+    /// Overrides applied to the scene config (`articulations[0].actuators.arm.stiffness=400.0`).
+    #[serde(default)]
+    pub overrides: Vec<String>,
 }
 
 /// A term that is a function called with typed parameters.

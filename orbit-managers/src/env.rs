@@ -12,7 +12,7 @@ use orbit_core::config::Node;
 use orbit_core::physics::build_backend;
 use orbit_core::rng::{EnvRng, streams};
 
-use crate::cfg::{EventMode, RlEnvCfg, SceneSource};
+use crate::cfg::{EventMode, RlEnvCfg};
 use crate::error::EnvError;
 use crate::managers::*;
 use crate::scene::Scene;
@@ -144,19 +144,17 @@ impl ManagerBasedRlEnv {
                 message: format!("expected a positive duration, got {}", cfg.episode_length_s),
             });
         }
-        let desc = match &cfg.scene {
-            SceneSource::Bundled(name) if name == "box_pushing_scene.ron" => {
-                orbit_assets::box_pushing_scene(&[])?
-            }
-            SceneSource::Bundled(name) => {
-                return Err(EnvError::InvalidTerm {
-                    field: "scene".into(),
-                    message: format!(
-                        "no bundled scene `{name}`; bundled: {:?}",
-                        orbit_assets::bundled_names()
-                    ),
-                });
-            }
+        let desc = if cfg.scene.bundled == "box_pushing_scene.ron" {
+            orbit_assets::box_pushing_scene(&cfg.scene.overrides)?
+        } else {
+            return Err(EnvError::InvalidTerm {
+                field: "scene.bundled".into(),
+                message: format!(
+                    "no bundled scene `{}`; bundled files: {:?}",
+                    cfg.scene.bundled,
+                    orbit_assets::bundled_names()
+                ),
+            });
         };
         let backend = build_backend(&desc, cfg.num_envs, &cfg.sim)?;
         let scene = Scene::new(backend, desc);
@@ -280,7 +278,7 @@ impl ManagerBasedRlEnv {
         self.rewards
             .reset(env_ids, self.cfg.episode_length_s, &mut log);
         self.commands
-            .reset(&self.scene, env_ids, &mut self.command_rngs);
+            .reset(&self.scene, env_ids, &mut self.command_rngs, &mut log);
         self.terminations.reset(env_ids, &mut log);
         self.extras.log = log;
         for &e in env_ids {
@@ -312,6 +310,7 @@ impl ManagerBasedRlEnv {
         self.terminated = terminated;
         self.time_outs = time_outs;
         self.reward = reward;
+        self.commands.update_metrics(&self.scene);
         self.reset_ids.clear();
         self.reset_ids
             .extend((0..self.num_envs()).filter(|&e| self.terminated[e] || self.time_outs[e]));

@@ -485,8 +485,25 @@ impl CommandManager {
         term.term.resample(scene, env_ids, rngs);
     }
 
-    pub(crate) fn reset(&mut self, scene: &Scene, env_ids: &[usize], rngs: &mut EnvRngs) {
+    pub(crate) fn update_metrics(&mut self, scene: &Scene) {
         for t in &mut self.terms {
+            t.term.update_metrics(scene);
+        }
+    }
+
+    pub(crate) fn reset(
+        &mut self,
+        scene: &Scene,
+        env_ids: &[usize],
+        rngs: &mut EnvRngs,
+        log: &mut BTreeMap<String, f32>,
+    ) {
+        for t in &mut self.terms {
+            for (metric, values) in t.term.metrics() {
+                let mean =
+                    env_ids.iter().map(|&e| values[e]).sum::<f32>() / env_ids.len().max(1) as f32;
+                log.insert(format!("Metrics/{}/{metric}", t.name), mean);
+            }
             Self::resample(t, scene, env_ids, rngs);
         }
     }

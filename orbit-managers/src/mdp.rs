@@ -400,8 +400,9 @@ pub struct JointActionParams {
     /// Raw actions are clipped to this range first (Fancy Gym clips to `[-1, 1]`).
     #[serde(default)]
     pub clip: Option<(f32, f32)>,
-    /// Effort actions: add the backend's bias forces (gravity + Coriolis compensation), as
-    /// Fancy Gym's torque controller does.
+    /// Add the backend's bias forces (gravity + Coriolis compensation) as effort: on top of the
+    /// processed torque for effort actions (Fancy Gym's torque controller), as a feed-forward
+    /// effort beside the targets for position actions.
     #[serde(default)]
     pub compensate_bias: bool,
     /// Effort actions: clip the final effort per joint (Fancy Gym's `q_torque_max`).
@@ -443,6 +444,8 @@ struct JointAction {
     processed: Vec<f32>,
     /// Full `num_envs × num_dofs` target/effort buffer.
     full: Vec<f32>,
+    /// Feed-forward bias efforts of position actions.
+    feed_forward: Vec<f32>,
 }
 
 impl ActionTerm for JointAction {
@@ -479,9 +482,26 @@ impl ActionTerm for JointAction {
             }
         }
         match self.kind {
-            JointActionKind::Position => scene
-                .backend
-                .set_joint_position_targets(self.sel.articulation, &self.full)?,
+            JointActionKind::Position => {
+                scene
+                    .backend
+                    .set_joint_position_targets(self.sel.articulation, &self.full)?;
+                if self.p.compensate_bias {
+                    let bias = scene
+                        .backend
+                        .articulation(self.sel.articulation)
+                        .bias_forces;
+                    self.feed_forward.fill(0.0);
+                    for e in 0..scene.num_envs() {
+                        for &j in &self.sel.dofs {
+                            self.feed_forward[e * n + j] = bias[e * n + j];
+                        }
+                    }
+                    scene
+                        .backend
+                        .set_joint_efforts(self.sel.articulation, &self.feed_forward)?;
+                }
+            }
             JointActionKind::Effort => scene
                 .backend
                 .set_joint_efforts(self.sel.articulation, &self.full)?,
@@ -535,6 +555,7 @@ fn joint_action(
     };
     Ok(Box::new(JointAction {
         kind,
+        feed_forward: vec![0.0; full.len()],
         full,
         processed: vec![0.0; n * d],
         sel,

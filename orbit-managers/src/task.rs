@@ -13,6 +13,8 @@ pub struct TaskDef {
     pub file_name: &'static str,
     /// The env config (RON text).
     pub config: &'static str,
+    /// Overrides that turn the config into this variant (applied before the user's).
+    pub overrides: &'static [&'static str],
 }
 
 inventory::collect!(TaskDef);
@@ -36,5 +38,11 @@ pub fn make(id: &str, overrides: &[String]) -> Result<ManagerBasedRlEnv, EnvErro
                 tasks().iter().map(|t| t.id).collect::<Vec<_>>()
             ),
         })?;
-    ManagerBasedRlEnv::from_ron(task.config, task.file_name, overrides)
+    let all: Vec<String> = task
+        .overrides
+        .iter()
+        .map(|s| s.to_string())
+        .chain(overrides.iter().cloned())
+        .collect();
+    ManagerBasedRlEnv::from_ron(task.config, task.file_name, &all)
 }

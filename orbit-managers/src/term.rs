@@ -101,6 +101,14 @@ pub trait CommandTerm: Send {
     fn command(&self) -> &[f32];
     /// Draws new commands for the listed envs.
     fn resample(&mut self, scene: &Scene, env_ids: &[usize], rng: &mut crate::env::EnvRngs);
+    /// Recomputes the metrics on the current state (called after rewards, before resets, so
+    /// the values logged for a finished episode describe its terminal state).
+    fn update_metrics(&mut self, _scene: &Scene) {}
+    /// Named per-env metrics, logged at reset as `Metrics/<term>/<name>` (mean over the
+    /// resetting envs).
+    fn metrics(&self) -> &[(&'static str, Vec<f32>)] {
+        &[]
+    }
 }
 
 macro_rules! registry {

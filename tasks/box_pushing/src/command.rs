@@ -1,5 +1,6 @@
 //! The target-pose command: Fancy Gym's `sample_context` with its minimum-distance rule.
 
+use orbit_core::math::{quat_wxyz, rotation_distance};
 use orbit_managers::term::{CommandTerm, CommandTermDef, TermContext};
 use orbit_managers::{EnvError, EnvRngs, Scene};
 use serde::Deserialize;
@@ -40,7 +41,15 @@ struct TargetPose {
     object: usize,
     p: TargetPoseParams,
     command: Vec<f32>,
+    /// `position_error` (m), `orientation_error` (rad), `success` (1 if both are within
+    /// Fancy Gym's 0.05 m / 0.5 rad).
+    metrics: [(&'static str, Vec<f32>); 3],
 }
+
+/// Fancy Gym's success thresholds (spec §5.3).
+pub const SUCCESS_DISTANCE: f32 = 0.05;
+/// Fancy Gym's success threshold on the orientation error (rad).
+pub const SUCCESS_ANGLE: f32 = 0.5;
 
 /// Draws at most this many candidates per resample (Fancy Gym loops without bound; with the
 /// default ranges the acceptance rate is above 0.5, so the cap is never reached in practice).
@@ -53,6 +62,23 @@ impl CommandTerm for TargetPose {
 
     fn command(&self) -> &[f32] {
         &self.command
+    }
+
+    fn update_metrics(&mut self, scene: &Scene) {
+        let objects = scene.backend.rigid_object(self.object);
+        for e in 0..objects.pos.len() {
+            let c = &self.command[e * 7..(e + 1) * 7];
+            let d = (objects.pos[e] - glam::Vec3::new(c[0], c[1], c[2])).length();
+            let rho = rotation_distance(objects.quat[e], quat_wxyz([c[3], c[4], c[5], c[6]]));
+            self.metrics[0].1[e] = d;
+            self.metrics[1].1[e] = rho;
+            self.metrics[2].1[e] =
+                f32::from(u8::from(d <= SUCCESS_DISTANCE && rho <= SUCCESS_ANGLE));
+        }
+    }
+
+    fn metrics(&self) -> &[(&'static str, Vec<f32>)] {
+        &self.metrics
     }
 
     fn resample(&mut self, scene: &Scene, env_ids: &[usize], rng: &mut EnvRngs) {
@@ -104,6 +130,11 @@ fn build(ctx: &TermContext<'_>) -> Result<Box<dyn CommandTerm>, EnvError> {
         object,
         p,
         command: vec![0.0; n * 7],
+        metrics: [
+            ("position_error", vec![0.0; n]),
+            ("orientation_error", vec![0.0; n]),
+            ("success", vec![0.0; n]),
+        ],
     }))
 }
 

@@ -10,14 +10,74 @@
 mod command;
 mod rewards;
 
-pub use command::TargetPoseParams;
+pub use command::{SUCCESS_ANGLE, SUCCESS_DISTANCE, TargetPoseParams};
 pub use rewards::*;
+
+const CONFIG: &str = include_str!("../config/box_pushing_torque.ron");
+const FILE: &str = "box_pushing_torque.ron (bundled)";
+
+/// TemporalSparse (spec §5.2): every step J + T + E(c = 0.02) + inclination; at the last step
+/// −350 d − 100 ρ/π − 50 ‖q̇‖ (weights × 50 = 1/step_dt).
+const TEMPORAL_SPARSE: &[&str] = &[
+    "rewards.energy.weight=-1.0",
+    "rewards.goal_distance=(func: \"box_goal_distance\", params: (only_at_end: true), weight: -17500.0)",
+    "rewards.goal_rotation=(func: \"box_goal_rotation\", params: (only_at_end: true), weight: -5000.0)",
+    "rewards.final_joint_speed=(func: \"arm_joint_speed\", params: (only_at_end: true), weight: -2500.0)",
+];
+
+/// TemporalSpatialSparse (spec §5.2): every step J + T + E(c = 0.02) + inclination; at the last
+/// step, if d < 0.1, 300 + clip(−1050 d, −100, 0) + clip(−150 ρ/π, −100, 0).
+const TEMPORAL_SPATIAL_SPARSE: &[&str] = &[
+    "rewards.energy.weight=-1.0",
+    "rewards.goal_distance.weight=0.0",
+    "rewards.goal_rotation.weight=0.0",
+    "rewards.final_bonus=(func: \"spatial_sparse_bonus\", params: (only_at_end: true), weight: 50.0)",
+];
+
+/// Joint-space control (Isaac Lab's way): the policy sets joint position targets around the
+/// default pose (`q* = q₀ + 0.5 a`) tracked by implicit PD drives with Isaac Lab's high-PD Franka
+/// gains (k = 400, d = 80); gravity is compensated by a feed-forward bias effort.
+const JOINT_POS: &[&str] = &[
+    "scene.overrides=[\"articulations[0].actuators.arm.stiffness=400.0\", \"articulations[0].actuators.arm.damping=80.0\"]",
+    "actions.arm=(func: \"joint_position\", params: (joint_names: [\"panda_joint[1-7]\"], scale: 0.5, use_default_offset: true, compensate_bias: true))",
+];
 
 inventory::submit! {
     orbit_managers::TaskDef {
         id: "BoxPushing-Torque-Franka-v0",
         description: "Franka box pushing, Fancy Gym's torque law (10·clip(a) + bias compensation), Dense reward",
-        file_name: "box_pushing_torque.ron (bundled)",
-        config: include_str!("../config/box_pushing_torque.ron"),
+        file_name: FILE,
+        config: CONFIG,
+        overrides: &[],
+    }
+}
+
+inventory::submit! {
+    orbit_managers::TaskDef {
+        id: "BoxPushing-Torque-TemporalSparse-Franka-v0",
+        description: "Franka box pushing, torque law, TemporalSparse reward",
+        file_name: FILE,
+        config: CONFIG,
+        overrides: TEMPORAL_SPARSE,
+    }
+}
+
+inventory::submit! {
+    orbit_managers::TaskDef {
+        id: "BoxPushing-Torque-TemporalSpatialSparse-Franka-v0",
+        description: "Franka box pushing, torque law, TemporalSpatialSparse reward",
+        file_name: FILE,
+        config: CONFIG,
+        overrides: TEMPORAL_SPATIAL_SPARSE,
+    }
+}
+
+inventory::submit! {
+    orbit_managers::TaskDef {
+        id: "BoxPushing-JointPos-Franka-v0",
+        description: "Franka box pushing, joint position targets through implicit PD (k 400, d 80), Dense reward",
+        file_name: FILE,
+        config: CONFIG,
+        overrides: JOINT_POS,
     }
 }

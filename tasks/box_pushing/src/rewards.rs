@@ -29,6 +29,9 @@ pub struct BoxPushingParams {
     /// Action term whose processed values are the commanded torques `u`.
     #[serde(default = "arm")]
     pub action: String,
+    /// Count the term only at the last step of an episode (Fancy Gym's sparse variants).
+    #[serde(default)]
+    pub only_at_end: bool,
 }
 
 fn robot() -> String {
@@ -59,6 +62,7 @@ impl Default for BoxPushingParams {
             rod_tip: rod_tip(),
             rod: push_rod(),
             action: arm(),
+            only_at_end: false,
         }
     }
 }
@@ -73,6 +77,7 @@ struct Refs {
     rod_tip: (usize, Pose),
     rod: (usize, Pose),
     action: String,
+    only_at_end: bool,
 }
 
 impl Refs {
@@ -88,6 +93,7 @@ impl Refs {
             rod_tip: ctx.scene.frame(&f("rod_tip"), robot, &p.rod_tip)?,
             rod: ctx.scene.frame(&f("rod"), robot, &p.rod)?,
             action: p.action,
+            only_at_end: p.only_at_end,
         })
     }
 
@@ -120,6 +126,11 @@ enum Quantity {
     RodInclination,
     /// `Σ u²` of the action term's processed values.
     Energy,
+    /// `‖q̇‖` of the arm.
+    JointSpeed,
+    /// TemporalSpatialSparse's final bonus: if `d < 0.1`,
+    /// `300 + clip(−1050 d, −100, 0) + clip(−150 ρ/π, −100, 0)`, else 0.
+    SpatialBonus,
 }
 
 struct BoxPushingTerm {
@@ -132,7 +143,12 @@ impl RewardTerm for BoxPushingTerm {
         let objects = env.scene.backend.rigid_object(self.refs.object);
         let processed = env.actions.processed(&self.refs.action);
         let down = Quat::from_xyzw(1.0, 0.0, 0.0, 0.0);
+        let n = out.len();
         for (e, o) in out.iter_mut().enumerate() {
+            if self.refs.only_at_end && env.episode_length[e] < env.max_episode_length {
+                *o = 0.0;
+                continue;
+            }
             *o = match self.quantity {
                 Quantity::RodTipDistance => {
                     let tip = self.refs.frame(env, e, self.refs.rod_tip).pos;
@@ -152,16 +168,31 @@ impl RewardTerm for BoxPushingTerm {
                     }
                 }
                 Quantity::Energy => processed.map_or(0.0, |u| {
-                    let d = u.len() / out_len(env);
+                    let d = u.len() / n;
                     u[e * d..(e + 1) * d].iter().map(|x| x * x).sum()
                 }),
+                Quantity::JointSpeed => {
+                    let v = env.scene.backend.articulation(self.refs.robot).joint_vel;
+                    let d = v.len() / n;
+                    v[e * d..(e + 1) * d]
+                        .iter()
+                        .map(|x| x * x)
+                        .sum::<f32>()
+                        .sqrt()
+                }
+                Quantity::SpatialBonus => {
+                    let (p, q) = self.refs.target(env, e);
+                    let d = (objects.pos[e] - p).length();
+                    let rho = rotation_distance(objects.quat[e], q) / std::f32::consts::PI;
+                    if d < 0.1 {
+                        300.0 + (-1050.0 * d).clamp(-100.0, 0.0) + (-150.0 * rho).clamp(-100.0, 0.0)
+                    } else {
+                        0.0
+                    }
+                }
             };
         }
     }
-}
-
-fn out_len(env: &EnvView<'_>) -> usize {
-    env.scene.num_envs()
 }
 
 fn term(ctx: &TermContext<'_>, quantity: Quantity) -> Result<Box<dyn RewardTerm>, EnvError> {
@@ -176,6 +207,8 @@ inventory::submit! { RewardTermDef { name: "box_goal_distance", build: |c| term(
 inventory::submit! { RewardTermDef { name: "box_goal_rotation", build: |c| term(c, Quantity::GoalRotation) } }
 inventory::submit! { RewardTermDef { name: "rod_inclination", build: |c| term(c, Quantity::RodInclination) } }
 inventory::submit! { RewardTermDef { name: "action_energy", build: |c| term(c, Quantity::Energy) } }
+inventory::submit! { RewardTermDef { name: "arm_joint_speed", build: |c| term(c, Quantity::JointSpeed) } }
+inventory::submit! { RewardTermDef { name: "spatial_sparse_bonus", build: |c| term(c, Quantity::SpatialBonus) } }
 
 /// Parameters of `joint_limit_violation`: Fancy Gym's limits (spec §2.5).
 #[derive(Clone, Debug, Deserialize)]

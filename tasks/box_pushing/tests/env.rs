@@ -203,3 +203,69 @@ fn time_out_step_returns_the_new_episodes_observation() {
         "last action is cleared on reset"
     );
 }
+
+/// Every registered task builds and runs an episode; the success metric is logged at the end.
+#[test]
+fn every_registered_task_runs_an_episode() {
+    let tasks = orbit_managers::tasks();
+    assert!(
+        tasks.len() >= 4,
+        "{:?}",
+        tasks.iter().map(|t| t.id).collect::<Vec<_>>()
+    );
+    for task in tasks {
+        let mut env =
+            make(task.id, &["num_envs=2".into()]).unwrap_or_else(|e| panic!("{}: {e}", task.id));
+        env.reset().unwrap();
+        let zero = vec![0.0; 2 * env.action_dim()];
+        let mut log = None;
+        for _ in 0..env.max_episode_length() {
+            let r = env.step(&zero).unwrap();
+            assert!(r.reward.iter().all(|x| x.is_finite()), "{}", task.id);
+            log = Some(r.extras.log.clone());
+        }
+        let log = log.unwrap();
+        assert_eq!(
+            log.get("Metrics/target/success"),
+            Some(&0.0),
+            "{}: {log:?}",
+            task.id
+        );
+        let err = log["Metrics/target/position_error"];
+        assert!(
+            err > 0.3 - 0.02,
+            "{}: an untouched box stays ≥ 0.3 m from its target, got {err}",
+            task.id
+        );
+    }
+}
+
+/// TemporalSparse pays only the dense shaping terms before the last step and the large final
+/// penalty at the last step; with zero action its final step dominates.
+#[test]
+fn temporal_sparse_pays_at_the_last_step() {
+    let mut env = make(
+        "BoxPushing-Torque-TemporalSparse-Franka-v0",
+        &["num_envs=1".into(), SEED0_TARGET.into()],
+    )
+    .unwrap();
+    env.reset().unwrap();
+    let zero = vec![0.0; env.action_dim()];
+    let mut rewards = Vec::new();
+    for _ in 0..100 {
+        rewards.push(env.step(&zero).unwrap().reward[0]);
+    }
+    // Per step: joint limits 0, energy 0, rod term −2 r_tip with MuJoCo's resting rod-tip-to-box
+    // distance r_tip = 0.0543 m (rod tip at z 0.0450, box origin at rest at z −0.0092); 3 mm slack.
+    let shaping = -2.0 * 0.05425;
+    for (k, r) in rewards[..99].iter().enumerate() {
+        assert!((r - shaping).abs() < 6e-3, "step {}: {r}", k + 1);
+    }
+    // Last step: shaping − 350 d − 100 ρ/π − 50 ‖q̇‖ with Fancy Gym's d = 0.5153, ρ = 0.1038.
+    let expected = shaping - 350.0 * 0.5153071 - 100.0 * 0.1038462 / std::f32::consts::PI;
+    assert!(
+        (rewards[99] - expected).abs() < 0.01 * expected.abs(),
+        "last step {} vs {expected}",
+        rewards[99]
+    );
+}

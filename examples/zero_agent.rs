@@ -1,0 +1,11 @@
+//! Runs a registered task with zero actions (same flags as `random_agent`):
+//!
+//! ```text
+//! cargo run --release --example zero_agent -- --task BoxPushing-JointPos-Franka-v0
+//! ```
+
+use clap::Parser;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    orbit::agent::run(&orbit::agent::AgentArgs::parse(), true)
+}

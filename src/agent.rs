@@ -1,0 +1,67 @@
+//! The loop behind the `random_agent` and `zero_agent` examples (Isaac Lab's scripts of the
+//! same names): build a registered task, step it with random or zero actions, report.
+
+use clap::Parser;
+use orbit_core::rng::{EnvRng, streams};
+
+/// Isaac Lab's agent-script flags.
+#[derive(Parser, Debug)]
+pub struct AgentArgs {
+    /// Task id (see the `list_tasks` example).
+    #[arg(long, default_value = "BoxPushing-Torque-Franka-v0")]
+    pub task: String,
+    /// Number of envs.
+    #[arg(long)]
+    pub num_envs: Option<usize>,
+    /// Seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Physics backend.
+    #[arg(long)]
+    pub backend: Option<String>,
+    /// Env steps to run.
+    #[arg(long, default_value_t = 200)]
+    pub steps: usize,
+    /// Config overrides `key.path=value`.
+    #[arg(long = "set")]
+    pub overrides: Vec<String>,
+}
+
+/// Runs the task with uniform random actions in `[-1, 1]` (or zeros) and prints episode logs
+/// and throughput.
+pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let overrides = crate::run_overrides(
+        args.num_envs,
+        args.seed,
+        args.backend.as_deref(),
+        &args.overrides,
+    );
+    let mut env = crate::make(&args.task, &overrides)?;
+    env.reset()?;
+    let (n, d) = (env.num_envs(), env.action_dim());
+    let mut rng = EnvRng::new(args.seed.unwrap_or(0), 0, streams::POLICY);
+    let mut action = vec![0.0f32; n * d];
+    let start = std::time::Instant::now();
+    let mut mean_reward = 0.0f64;
+    for step in 0..args.steps {
+        if !zero {
+            action
+                .iter_mut()
+                .for_each(|a| *a = rng.uniform_range(-1.0, 1.0));
+        }
+        let r = env.step(&action)?;
+        mean_reward += r.reward.iter().map(|&x| f64::from(x)).sum::<f64>() / n as f64;
+        if r.time_outs.iter().chain(r.terminated).any(|&x| x) {
+            println!("step {:>5}: episode end {:?}", step + 1, r.extras.log);
+        }
+    }
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "{}: {n} envs × {} steps in {secs:.2} s ({:.0} env-steps/s), mean reward per step {:.4}",
+        args.task,
+        args.steps,
+        (n * args.steps) as f64 / secs,
+        mean_reward / args.steps as f64
+    );
+    Ok(())
+}
