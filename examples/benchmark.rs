@@ -35,9 +35,42 @@ struct Args {
     /// Velocity-solver iterations per physics step.
     #[arg(long, default_value_t = SimCfg::default().solver_iterations)]
     solver_iterations: usize,
+    /// Task used for the full-env column.
+    #[arg(long, default_value = "BoxPushing-Torque-Franka-v0")]
+    task: String,
     /// Scene config overrides `key.path=value`.
     #[arg(long = "set")]
     overrides: Vec<String>,
+}
+
+/// Seconds for `args.steps` steps of the full manager-based env (`--task`) with the same
+/// sinusoidal actions (after 20 warm-up steps).
+fn full_env_seconds(args: &Args, n: usize) -> Result<f64, Box<dyn std::error::Error>> {
+    let mut overrides = orbit::run_overrides(Some(n), None, Some(&args.backend), &[]);
+    overrides.push(format!("sim.num_threads={}", args.threads));
+    overrides.push(format!("sim.solver_iterations={}", args.solver_iterations));
+    overrides.push(format!("decimation={}", args.decimation));
+    let mut env = orbit::make(&args.task, &overrides)?;
+    env.reset()?;
+    let d = env.action_dim();
+    let mut action = vec![0.0f32; n * d];
+    let mut run = |env: &mut orbit::managers::ManagerBasedRlEnv,
+                   steps: usize,
+                   t0: usize|
+     -> Result<(), Box<dyn std::error::Error>> {
+        for k in t0..t0 + steps {
+            let t = k as f32 * 0.02;
+            for (i, a) in action.iter_mut().enumerate() {
+                *a = 0.03 * (2.0 * std::f32::consts::PI * 0.5 * t + (i % d) as f32).sin();
+            }
+            env.step(&action)?;
+        }
+        Ok(())
+    };
+    run(&mut env, 20, 0)?;
+    let start = Instant::now();
+    run(&mut env, args.steps, 20)?;
+    Ok(start.elapsed().as_secs_f64())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -58,8 +91,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "backend {} | {} substeps of {} s per env step | {threads} threads",
         args.backend, args.decimation, sim.dt
     );
-    println!("| envs | env-steps/s | env-steps/s per thread | µs per env step (batch) |");
-    println!("|-----:|------------:|-----------------------:|------------------------:|");
+    println!(
+        "| envs | physics env-steps/s | per thread | full env env-steps/s | manager overhead |"
+    );
+    println!(
+        "|-----:|--------------------:|-----------:|---------------------:|-----------------:|"
+    );
     for &n in &args.num_envs {
         let mut backend = build_backend(&scene, n, &sim)?;
         let dofs = backend.layout().articulations[0].num_dofs();
@@ -90,10 +127,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         run(&mut backend, args.steps, 20)?;
         let secs = start.elapsed().as_secs_f64();
         let rate = (n * args.steps) as f64 / secs;
+        let env_secs = full_env_seconds(&args, n)?;
+        let env_rate = (n * args.steps) as f64 / env_secs;
         println!(
-            "| {n:>4} | {rate:>11.0} | {:>22.0} | {:>23.1} |",
+            "| {n:>4} | {rate:>19.0} | {:>10.0} | {env_rate:>20.0} | {:>15.1} % |",
             rate / threads as f64,
-            secs / args.steps as f64 * 1e6
+            (env_secs / secs - 1.0) * 100.0
         );
     }
     Ok(())

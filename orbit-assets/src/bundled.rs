@@ -53,12 +53,22 @@ pub fn box_pushing_scene_cfg(overrides: &[String]) -> Result<SceneCfg, ConfigErr
 /// The bundled box-pushing scene, resolved (models loaded, regexes matched), with `overrides`
 /// applied to its config first.
 pub fn box_pushing_scene(overrides: &[String]) -> Result<SceneDesc, AssetError> {
-    let cfg = box_pushing_scene_cfg(overrides)?;
+    bundled_scene("box_pushing_scene.ron", overrides)
+}
+
+/// A bundled scene config by file name, with `overrides` applied, resolved.
+pub fn bundled_scene(name: &str, overrides: &[String]) -> Result<SceneDesc, AssetError> {
+    let text = bundled(name)
+        .filter(|_| name.ends_with(".ron"))
+        .ok_or_else(|| AssetError::NotFound {
+            path: name.to_string(),
+            tried: vec![],
+            bundled: NAMES.iter().map(|n| n.to_string()).collect(),
+        })?;
+    let file = format!("{name} (bundled)");
+    let cfg: SceneCfg = orbit_core::config::from_str(text, &file, overrides)?;
     cfg.resolve(&model_loader(None))
-        .map_err(|source| AssetError::Scene {
-            file: "box_pushing_scene.ron (bundled)".into(),
-            source,
-        })
+        .map_err(|source| AssetError::Scene { file, source })
 }
 
 /// Loads a scene config from a RON file (with includes and overrides) and resolves it; URDF

@@ -19,8 +19,8 @@ mod error;
 mod urdf;
 
 pub use bundled::{
-    box_pushing_scene, box_pushing_scene_cfg, bundled, bundled_names, load_model, load_scene,
-    model_loader,
+    box_pushing_scene, box_pushing_scene_cfg, bundled, bundled_names, bundled_scene, load_model,
+    load_scene, model_loader,
 };
 pub use error::AssetError;
 pub use urdf::{model_from_urdf_file, model_from_urdf_str};

@@ -137,7 +137,7 @@ pub struct ObservationGroupCfg {
     pub terms: Terms<ObservationTermCfg>,
 }
 
-/// An event term (`mode`: "startup", "reset" or "interval").
+/// An event term (`mode`: `Startup`, `Reset` or `Interval`).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EventTermCfg {
@@ -188,7 +188,8 @@ pub struct RlEnvCfg {
     pub num_envs: usize,
     /// Physics steps per env step.
     pub decimation: usize,
-    /// Episode length in seconds (`max_episode_length = ceil(T / (dt · decimation))`).
+    /// Episode length in seconds (`max_episode_length = ceil(T / (dt · decimation) − 1e-4)`, the
+    /// small margin absorbing float rounding so 2 s at 20 ms is exactly 100 steps).
     pub episode_length_s: f32,
     /// Physics settings, including the backend name.
     #[serde(default)]

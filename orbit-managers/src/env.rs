@@ -3,7 +3,8 @@
 //!
 //! `step(action)`: process actions → `decimation` × (apply actions, physics step) → episode
 //! counters += 1 → terminations → rewards (× `step_dt`, on the terminal state) → reset of
-//! finished envs (reset events, command resampling, logs) → command timers → interval events →
+//! command metrics on the terminal state → reset of finished envs (reset events, logs, command
+//! resampling) → command timers → interval events →
 //! observations (a reset env's observation belongs to its new episode).
 
 use std::collections::BTreeMap;
@@ -114,6 +115,7 @@ pub struct ManagerBasedRlEnv {
     event_rngs: EnvRngs,
     command_rngs: EnvRngs,
     noise_rngs: EnvRngs,
+    interval_rngs: EnvRngs,
 }
 
 /// The result of a step: views into the env's buffers.
@@ -144,18 +146,7 @@ impl ManagerBasedRlEnv {
                 message: format!("expected a positive duration, got {}", cfg.episode_length_s),
             });
         }
-        let desc = if cfg.scene.bundled == "box_pushing_scene.ron" {
-            orbit_assets::box_pushing_scene(&cfg.scene.overrides)?
-        } else {
-            return Err(EnvError::InvalidTerm {
-                field: "scene.bundled".into(),
-                message: format!(
-                    "no bundled scene `{}`; bundled files: {:?}",
-                    cfg.scene.bundled,
-                    orbit_assets::bundled_names()
-                ),
-            });
-        };
+        let desc = orbit_assets::bundled_scene(&cfg.scene.bundled, &cfg.scene.overrides)?;
         let backend = build_backend(&desc, cfg.num_envs, &cfg.sim)?;
         let scene = Scene::new(backend, desc);
         let n = scene.num_envs();
@@ -165,10 +156,10 @@ impl ManagerBasedRlEnv {
         // termination, reward.
         let commands = CommandManager::new(doc, &scene, &cfg)?;
         let actions = ActionManager::new(doc, &scene, &cfg)?;
-        let observations = ObservationManager::new(doc, &scene, &cfg, actions.dim(), &commands)?;
+        let observations = ObservationManager::new(doc, &scene, &cfg, &actions, &commands)?;
         let events = EventManager::new(doc, &scene, &cfg)?;
-        let terminations = TerminationManager::new(doc, &scene, &cfg)?;
-        let rewards = RewardManager::new(doc, &scene, &cfg)?;
+        let terminations = TerminationManager::new(doc, &scene, &cfg, &actions, &commands)?;
+        let rewards = RewardManager::new(doc, &scene, &cfg, &actions, &commands)?;
         let seed = cfg.seed;
         let mut env = Self {
             scene,
@@ -190,14 +181,14 @@ impl ManagerBasedRlEnv {
             event_rngs: EnvRngs::new(seed, n, streams::RESET),
             command_rngs: EnvRngs::new(seed, n, streams::COMMAND),
             noise_rngs: EnvRngs::new(seed, n, streams::NOISE),
+            interval_rngs: EnvRngs::new(seed, n, streams::INTERVAL),
             cfg,
         };
         let all: Vec<usize> = (0..n).collect();
         let mut startup = EnvRngs::new(seed, n, streams::STARTUP);
         env.events
             .apply(EventMode::Startup, &mut env.scene, &all, &mut startup)?;
-        let mut interval = EnvRngs::new(seed, n, streams::INTERVAL);
-        env.events.init_intervals(&mut interval);
+        env.events.init_intervals(&mut env.interval_rngs);
         Ok(env)
     }
 
@@ -322,12 +313,8 @@ impl ManagerBasedRlEnv {
         }
         self.commands
             .compute(&self.scene, self.step_dt, &mut self.command_rngs);
-        let mut interval = std::mem::replace(&mut self.event_rngs, EnvRngs { rngs: Vec::new() });
-        let r = self
-            .events
-            .apply_interval(&mut self.scene, self.step_dt, &mut interval);
-        self.event_rngs = interval;
-        r?;
+        self.events
+            .apply_interval(&mut self.scene, self.step_dt, &mut self.interval_rngs)?;
         self.compute_observations();
         Ok(StepResult {
             reward: &self.reward,

@@ -25,8 +25,33 @@ pub(crate) fn context<'a>(
         decimation: cfg.decimation,
         step_dt: cfg.sim.dt * cfg.decimation as f32,
         action_dim: 0,
+        action_terms: Vec::new(),
         command_dims: Vec::new(),
     }
+}
+
+/// A term context that also knows the action and command terms (for terms built after them).
+pub(crate) fn context_after<'a>(
+    doc: &'a Node,
+    scene: &'a Scene,
+    cfg: &RlEnvCfg,
+    field: String,
+    actions: &ActionManager,
+    commands: &CommandManager,
+) -> TermContext<'a> {
+    let mut ctx = context(doc, scene, cfg, field);
+    ctx.action_dim = actions.dim;
+    ctx.action_terms = actions
+        .terms
+        .iter()
+        .map(|(n, t)| (n.clone(), t.dim()))
+        .collect();
+    ctx.command_dims = commands
+        .terms
+        .iter()
+        .map(|c| (c.name.clone(), c.term.dim()))
+        .collect();
+    ctx
 }
 
 /// Splits the policy action among action terms; keeps the current and previous actions.
@@ -150,7 +175,7 @@ impl ObservationManager {
         doc: &Node,
         scene: &Scene,
         cfg: &RlEnvCfg,
-        action_dim: usize,
+        actions: &ActionManager,
         commands: &CommandManager,
     ) -> Result<Self, EnvError> {
         let n = scene.num_envs();
@@ -158,18 +183,14 @@ impl ObservationManager {
         for (gname, g) in &cfg.observations.0 {
             let mut terms = Vec::new();
             for (tname, t) in &g.terms.0 {
-                let mut ctx = context(
+                let ctx = context_after(
                     doc,
                     scene,
                     cfg,
                     format!("observations.{gname}.terms.{tname}"),
+                    actions,
+                    commands,
                 );
-                ctx.action_dim = action_dim;
-                ctx.command_dims = commands
-                    .terms
-                    .iter()
-                    .map(|c| (c.name.clone(), c.term.dim()))
-                    .collect();
                 let term = build_observation(&t.func, &ctx)?;
                 let d = term.dim();
                 terms.push(ObsTerm {
@@ -232,7 +253,13 @@ pub struct RewardManager {
 }
 
 impl RewardManager {
-    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+    pub(crate) fn new(
+        doc: &Node,
+        scene: &Scene,
+        cfg: &RlEnvCfg,
+        actions: &ActionManager,
+        commands: &CommandManager,
+    ) -> Result<Self, EnvError> {
         let mut terms = Vec::new();
         for (name, t) in &cfg.rewards.0 {
             if !t.weight.is_finite() {
@@ -244,7 +271,14 @@ impl RewardManager {
             if t.weight == 0.0 {
                 continue;
             }
-            let ctx = context(doc, scene, cfg, format!("rewards.{name}"));
+            let ctx = context_after(
+                doc,
+                scene,
+                cfg,
+                format!("rewards.{name}"),
+                actions,
+                commands,
+            );
             terms.push((name.clone(), t.weight, build_reward(&t.func, &ctx)?));
         }
         let n = scene.num_envs();
@@ -302,11 +336,24 @@ pub struct TerminationManager {
 }
 
 impl TerminationManager {
-    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+    pub(crate) fn new(
+        doc: &Node,
+        scene: &Scene,
+        cfg: &RlEnvCfg,
+        actions: &ActionManager,
+        commands: &CommandManager,
+    ) -> Result<Self, EnvError> {
         let n = scene.num_envs();
         let mut terms = Vec::new();
         for (name, t) in &cfg.terminations.0 {
-            let ctx = context(doc, scene, cfg, format!("terminations.{name}"));
+            let ctx = context_after(
+                doc,
+                scene,
+                cfg,
+                format!("terminations.{name}"),
+                actions,
+                commands,
+            );
             terms.push(TerminationEntry {
                 name: name.clone(),
                 time_out: t.time_out,

@@ -3,7 +3,8 @@
 use crate::env::ManagerBasedRlEnv;
 use crate::error::EnvError;
 
-/// A registered task: `inventory::submit! { TaskDef { id, description, config } }`.
+/// A registered task:
+/// `inventory::submit! { TaskDef { id, description, file_name, config, overrides } }`.
 pub struct TaskDef {
     /// Task id.
     pub id: &'static str,

@@ -21,9 +21,12 @@ pub struct TermContext<'a> {
     pub decimation: usize,
     /// Env step duration in seconds.
     pub step_dt: f32,
-    /// Total action dimension (known once the action manager is built).
+    /// Total action dimension (known to observation, reward and termination terms, which are
+    /// built after the action manager; 0 for command, action and event terms).
     pub action_dim: usize,
-    /// Command terms and their dimensions (known once the command manager is built).
+    /// Action terms and their dimensions (same availability as `action_dim`).
+    pub action_terms: Vec<(String, usize)>,
+    /// Command terms and their dimensions (known to observation, reward and termination terms).
     pub command_dims: Vec<(String, usize)>,
 }
 

@@ -85,6 +85,22 @@ impl Refs {
         let p: BoxPushingParams = ctx.params()?;
         let f = |s: &str| format!("{}.params.{s}", ctx.field);
         let robot = ctx.scene.articulation(&f("robot"), &p.robot)?;
+        if !ctx
+            .command_dims
+            .iter()
+            .any(|(n, d)| *n == p.command && *d == 7)
+        {
+            return Err(ctx.error(format!(
+                "params.command: no 7-d pose command named `{}`; commands: {:?}",
+                p.command, ctx.command_dims
+            )));
+        }
+        if !ctx.action_terms.iter().any(|(n, _)| *n == p.action) {
+            return Err(ctx.error(format!(
+                "params.action: no action term named `{}`; action terms: {:?}",
+                p.action, ctx.action_terms
+            )));
+        }
         Ok(Self {
             robot,
             links: ctx.scene.backend.layout().articulations[robot].num_links(),
