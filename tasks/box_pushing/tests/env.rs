@@ -133,9 +133,21 @@ fn config_errors_name_file_and_field() {
         "{bad_param}"
     );
     assert!(bad_param.contains("robbot"), "{bad_param}");
-    let bad_command = make(TASK, &["rewards.goal_distance.params=(command: \"goal\")".into()]).err().unwrap().to_string();
-    assert!(bad_command.contains("rewards.goal_distance"), "{bad_command}");
-    assert!(bad_command.contains("no 7-d pose command named `goal`"), "{bad_command}");
+    let bad_command = make(
+        TASK,
+        &["rewards.goal_distance.params=(command: \"goal\")".into()],
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(
+        bad_command.contains("rewards.goal_distance"),
+        "{bad_command}"
+    );
+    assert!(
+        bad_command.contains("no 7-d pose command named `goal`"),
+        "{bad_command}"
+    );
 }
 
 /// Observation layout: joint pos/vel (7 + 7), box pose (3 + 4), target (7), last action (7).
