@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod cfg;
+pub mod diff_ik;
 mod env;
 mod error;
 pub mod managers;

@@ -42,6 +42,24 @@ const JOINT_POS: &[&str] = &[
     "actions.arm=(func: \"joint_position\", params: (joint_names: [\"panda_joint[1-7]\"], scale: 0.5, use_default_offset: true, compensate_bias: true))",
 ];
 
+/// Task-space control: the policy commands a relative pose change of the tcp (`Δp` up to 2 cm,
+/// `Δr` up to 0.05 rad per step), turned into joint targets by damped-least-squares
+/// differential IK and tracked by implicit PD (k 400, d 80) with gravity compensation.
+const TASK_SPACE: &[&str] = &[
+    "scene.overrides=[\"articulations[0].actuators.arm.stiffness=400.0\", \"articulations[0].actuators.arm.damping=80.0\"]",
+    "actions.arm=(func: \"differential_ik\", params: (joint_names: [\"panda_joint[1-7]\"], body_name: \"tcp\", scale: 0.02, command_type: Pose, use_relative_mode: true, ik_method: Dls(lambda_val: 0.01), compensate_bias: true))",
+];
+
+inventory::submit! {
+    orbit_managers::TaskDef {
+        id: "BoxPushing-TaskSpace-Franka-v0",
+        description: "Franka box pushing, relative tcp pose commands through differential IK (DLS) and implicit PD, Dense reward",
+        file_name: FILE,
+        config: CONFIG,
+        overrides: TASK_SPACE,
+    }
+}
+
 inventory::submit! {
     orbit_managers::TaskDef {
         id: "BoxPushing-Torque-Franka-v0",
