@@ -566,3 +566,170 @@ fn joint_action(
 
 inventory::submit! { ActionTermDef { name: "joint_position", build: |c| joint_action(c, JointActionKind::Position) } }
 inventory::submit! { ActionTermDef { name: "joint_effort", build: |c| joint_action(c, JointActionKind::Effort) } }
+
+/// Parameters of `reset_joints_by_offset` / `reset_joints_by_scale`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResetJointsParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub asset: String,
+    /// Joint-name regexes.
+    #[serde(default = "all_joints")]
+    pub joint_names: Vec<String>,
+    /// Range added to (offset) or multiplied with (scale) the default positions.
+    pub position_range: (f32, f32),
+    /// Range added to or multiplied with the default velocities.
+    #[serde(default)]
+    pub velocity_range: (f32, f32),
+}
+
+impl Default for ResetJointsParams {
+    fn default() -> Self {
+        Self {
+            asset: robot(),
+            joint_names: all_joints(),
+            position_range: (0.0, 0.0),
+            velocity_range: (0.0, 0.0),
+        }
+    }
+}
+
+/// `reset_joints_by_offset` / `_by_scale`: default joint state plus (or times) uniform noise,
+/// positions clamped to the joint limits; unselected joints get their defaults.
+struct ResetJoints {
+    sel: JointSel,
+    p: ResetJointsParams,
+    scale: bool,
+    limits: Vec<[f32; 2]>,
+}
+
+impl EventTerm for ResetJoints {
+    fn apply(
+        &mut self,
+        scene: &mut Scene,
+        env_ids: &[usize],
+        rng: &mut EnvRngs,
+    ) -> Result<(), EnvError> {
+        let desc = &scene.desc.articulations[self.sel.articulation];
+        let n = self.sel.num_dofs;
+        let mut pos = desc.default_joint_pos.repeat(env_ids.len());
+        let mut vel = desc.default_joint_vel.repeat(env_ids.len());
+        for (i, &e) in env_ids.iter().enumerate() {
+            let r = rng.get(e);
+            for &j in &self.sel.dofs {
+                let (dp, dv) = (
+                    r.uniform_range(self.p.position_range.0, self.p.position_range.1),
+                    r.uniform_range(self.p.velocity_range.0, self.p.velocity_range.1),
+                );
+                let (q, v) = (&mut pos[i * n + j], &mut vel[i * n + j]);
+                if self.scale {
+                    *q *= dp;
+                    *v *= dv;
+                } else {
+                    *q += dp;
+                    *v += dv;
+                }
+                *q = q.clamp(self.limits[j][0], self.limits[j][1]);
+            }
+        }
+        scene
+            .backend
+            .write_joint_state(self.sel.articulation, env_ids, &pos, &vel)?;
+        Ok(())
+    }
+}
+
+fn reset_joints(ctx: &TermContext<'_>, scale: bool) -> Result<Box<dyn EventTerm>, EnvError> {
+    let p: ResetJointsParams = ctx.params()?;
+    for (name, (lo, hi)) in [
+        ("position_range", p.position_range),
+        ("velocity_range", p.velocity_range),
+    ] {
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return Err(ctx.error(format!(
+                "params.{name} must be a finite (lo, hi) with lo <= hi, got ({lo}, {hi})"
+            )));
+        }
+    }
+    let sel = JointSel::resolve(
+        ctx,
+        &JointsParams {
+            asset: p.asset.clone(),
+            joint_names: p.joint_names.clone(),
+        },
+    )?;
+    let model = &ctx.scene.desc.articulations[sel.articulation].model;
+    let limits = model
+        .dof_links()
+        .into_iter()
+        .map(|l| {
+            model.links[l]
+                .joint
+                .as_ref()
+                .and_then(|j| j.limits)
+                .unwrap_or([f32::MIN, f32::MAX])
+        })
+        .collect();
+    Ok(Box::new(ResetJoints {
+        sel,
+        p,
+        scale,
+        limits,
+    }))
+}
+
+inventory::submit! { EventTermDef { name: "reset_joints_by_offset", build: |c| reset_joints(c, false) } }
+inventory::submit! { EventTermDef { name: "reset_joints_by_scale", build: |c| reset_joints(c, true) } }
+
+/// Parameters of `object_position_in_robot_root_frame`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectInRobotParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub robot: String,
+    /// Rigid-object name.
+    pub object: String,
+}
+
+impl Default for ObjectInRobotParams {
+    fn default() -> Self {
+        Self {
+            robot: robot(),
+            object: "object".into(),
+        }
+    }
+}
+
+/// `object_position_in_robot_root_frame`: the object's position in the robot's root frame.
+struct ObjectInRobot {
+    robot: usize,
+    links: usize,
+    object: usize,
+}
+
+impl ObservationTerm for ObjectInRobot {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let robot = env.scene.backend.articulation(self.robot);
+        let object = env.scene.backend.rigid_object(self.object);
+        for (e, row) in out.chunks_exact_mut(3).enumerate() {
+            let root = orbit_core::math::Pose::new(
+                robot.link_pos[e * self.links],
+                robot.link_quat[e * self.links],
+            );
+            row.copy_from_slice(&root.inverse().transform_point(object.pos[e]).to_array());
+        }
+    }
+}
+
+inventory::submit! { ObservationTermDef { name: "object_position_in_robot_root_frame", build: |c| {
+    let p: ObjectInRobotParams = c.params()?;
+    let robot = c.scene.articulation(&format!("{}.params.robot", c.field), &p.robot)?;
+    let object = c.scene.rigid_object(&format!("{}.params.object", c.field), &p.object)?;
+    let links = c.scene.backend.layout().articulations[robot].num_links();
+    Ok(Box::new(ObjectInRobot { robot, links, object }))
+} } }

@@ -318,3 +318,40 @@ fn differential_ik_reaches_a_tcp_target() {
     assert!(err < 5e-3, "tcp {:?} vs target {target:?}", end.pos);
     assert!(tilt < 0.02, "orientation drifted {tilt} rad");
 }
+
+/// `reset_joints_by_offset` draws each env's joints within default ± range (different per env,
+/// reproducible per seed); `object_position_in_robot_root_frame` equals the box position for a
+/// robot rooted at the env origin.
+#[test]
+fn joint_offset_reset_and_object_in_robot_frame() {
+    let event = "events.jitter=(func: \"reset_joints_by_offset\", params: (joint_names: [\"panda_joint[1-7]\"], position_range: (-0.1, 0.1)), mode: Reset)";
+    let obs = "observations.policy.terms.box_in_robot=(func: \"object_position_in_robot_root_frame\", params: (object: \"box\"))";
+    let run = |seed: &str| {
+        let mut env = env(4, &[event, obs, seed]);
+        env.reset().unwrap();
+        env.observation("policy").unwrap().0.to_vec()
+    };
+    let (a, b, c) = (run("seed=3"), run("seed=3"), run("seed=4"));
+    assert_eq!(a, b, "same seed, same draws");
+    assert_ne!(a, c, "another seed, other draws");
+    let d = a.len() / 4;
+    let q0 = [
+        0.387_068_06f32,
+        0.176_208_42,
+        0.249_891_42,
+        -2.399_143_8,
+        -0.079_869_05,
+        2.568_573_7,
+        1.479_516_9,
+    ];
+    for e in 0..4 {
+        for j in 0..7 {
+            let dq = a[e * d + j] - q0[j];
+            assert!(dq.abs() <= 0.1 + 1e-6, "env {e} joint {j}: offset {dq}");
+        }
+        let box_pos = &a[e * d + 14..e * d + 17];
+        let in_robot = &a[e * d + 35..e * d + 38];
+        assert_eq!(box_pos, in_robot, "robot root at the env origin");
+    }
+    assert_ne!(a[0], a[d], "envs draw different offsets");
+}
