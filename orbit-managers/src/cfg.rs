@@ -124,6 +124,10 @@ pub struct ObservationTermCfg {
     /// Scale factor.
     #[serde(default)]
     pub scale: Option<f32>,
+    /// Number of past values kept and returned oldest to newest (0 = only the current one).
+    /// After a reset the first value fills every slot.
+    #[serde(default)]
+    pub history_length: usize,
 }
 
 /// An observation group (`policy`, `critic`).
@@ -212,4 +216,7 @@ pub struct RlEnvCfg {
     /// Command terms.
     #[serde(default)]
     pub commands: Terms<CommandTermCfg>,
+    /// Curriculum terms (run when envs reset).
+    #[serde(default)]
+    pub curriculum: Terms<FuncTermCfg>,
 }

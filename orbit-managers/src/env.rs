@@ -103,6 +103,7 @@ pub struct ManagerBasedRlEnv {
     terminations: TerminationManager,
     events: EventManager,
     commands: CommandManager,
+    curriculum: CurriculumManager,
     episode_length: Vec<u32>,
     max_episode_length: u32,
     common_step_counter: u64,
@@ -160,6 +161,7 @@ impl ManagerBasedRlEnv {
         let events = EventManager::new(doc, &scene, &cfg)?;
         let terminations = TerminationManager::new(doc, &scene, &cfg, &actions, &commands)?;
         let rewards = RewardManager::new(doc, &scene, &cfg, &actions, &commands)?;
+        let curriculum = CurriculumManager::new(doc, &scene, &cfg)?;
         let seed = cfg.seed;
         let mut env = Self {
             scene,
@@ -169,6 +171,7 @@ impl ManagerBasedRlEnv {
             terminations,
             events,
             commands,
+            curriculum,
             episode_length: vec![0; n],
             max_episode_length,
             common_step_counter: 0,
@@ -255,16 +258,24 @@ impl ManagerBasedRlEnv {
         Ok(())
     }
 
-    /// Resets the listed envs (Isaac Lab `_reset_idx`): reset events, logs, counters.
+    /// Resets the listed envs (Isaac Lab `_reset_idx`): curriculum, reset events, observation
+    /// histories, logs (rewards, commands, terminations), episode counters.
     pub fn reset_idx(&mut self, env_ids: &[usize]) -> Result<(), EnvError> {
         orbit_core::physics::check_env_ids(env_ids, self.num_envs())?;
+        let mut log = BTreeMap::new();
+        self.curriculum.compute(
+            env_ids,
+            self.common_step_counter,
+            &mut self.rewards,
+            &mut log,
+        )?;
         self.events.apply(
             EventMode::Reset,
             &mut self.scene,
             env_ids,
             &mut self.event_rngs,
         )?;
-        let mut log = BTreeMap::new();
+        self.observations.reset(env_ids);
         self.actions.reset(env_ids);
         self.rewards
             .reset(env_ids, self.cfg.episode_length_s, &mut log);

@@ -152,6 +152,18 @@ struct ObsTerm {
     clip: Option<(f32, f32)>,
     scale: Option<f32>,
     buf: Vec<f32>,
+    /// History slots (0 = none): per env `history × dim` values, oldest first.
+    history: usize,
+    hist: Vec<f32>,
+    /// Envs whose next value fills the whole history (after a reset).
+    fresh: Vec<bool>,
+}
+
+impl ObsTerm {
+    /// Values per env in the group output.
+    fn out_dim(&self) -> usize {
+        self.term.dim() * self.history.max(1)
+    }
 }
 
 /// One observation group: its terms and the concatenated output.
@@ -199,9 +211,12 @@ impl ObservationManager {
                     clip: t.clip,
                     scale: t.scale,
                     buf: vec![0.0; n * d],
+                    history: t.history_length,
+                    hist: vec![0.0; n * d * t.history_length],
+                    fresh: vec![true; n],
                 });
             }
-            let dim = terms.iter().map(|t| t.term.dim()).sum();
+            let dim = terms.iter().map(|t| t.out_dim()).sum();
             groups.push(ObservationGroup {
                 name: gname.clone(),
                 terms,
@@ -236,10 +251,37 @@ impl ObservationManager {
                             *v *= s;
                         }
                     }
-                    g.values[e * g.dim + offset..e * g.dim + offset + d]
-                        .copy_from_slice(&t.buf[e * d..(e + 1) * d]);
+                    let row = &t.buf[e * d..(e + 1) * d];
+                    let out = &mut g.values[e * g.dim + offset..e * g.dim + offset + t.out_dim()];
+                    if t.history == 0 {
+                        out.copy_from_slice(row);
+                        continue;
+                    }
+                    let hist = &mut t.hist[e * d * t.history..(e + 1) * d * t.history];
+                    if std::mem::replace(&mut t.fresh[e], false) {
+                        hist.chunks_exact_mut(d)
+                            .for_each(|slot| slot.copy_from_slice(row));
+                    } else {
+                        hist.copy_within(d.., 0);
+                        let last = hist.len() - d;
+                        hist[last..].copy_from_slice(row);
+                    }
+                    out.copy_from_slice(hist);
                 }
-                offset += d;
+                offset += t.out_dim();
+            }
+        }
+    }
+}
+
+impl ObservationManager {
+    /// Marks the listed envs' histories to be refilled by their next value.
+    pub(crate) fn reset(&mut self, env_ids: &[usize]) {
+        for g in &mut self.groups {
+            for t in &mut g.terms {
+                for &e in env_ids {
+                    t.fresh[e] = true;
+                }
             }
         }
     }
@@ -268,9 +310,6 @@ impl RewardManager {
                     message: format!("expected a finite weight, got {}", t.weight),
                 });
             }
-            if t.weight == 0.0 {
-                continue;
-            }
             let ctx = context_after(
                 doc,
                 scene,
@@ -293,6 +332,9 @@ impl RewardManager {
     pub(crate) fn compute(&mut self, env: &EnvView<'_>, dt: f32, reward: &mut [f32]) {
         reward.fill(0.0);
         for (k, (_, weight, term)) in self.terms.iter_mut().enumerate() {
+            if *weight == 0.0 {
+                continue;
+            }
             term.compute(env, &mut self.buf);
             for (e, r) in reward.iter_mut().enumerate() {
                 let v = self.buf[e] * *weight * dt;
@@ -300,6 +342,35 @@ impl RewardManager {
                 self.episode_sums[k][e] += v;
             }
         }
+    }
+
+    /// The weight of a reward term.
+    pub fn weight(&self, name: &str) -> Option<f32> {
+        self.terms
+            .iter()
+            .find(|(n, ..)| n == name)
+            .map(|(_, w, _)| *w)
+    }
+
+    /// Changes the weight of a reward term (curricula); 0 switches it off.
+    pub fn set_weight(&mut self, name: &str, weight: f32) -> Result<(), EnvError> {
+        let names: Vec<String> = self.terms.iter().map(|(n, ..)| n.clone()).collect();
+        let term = self
+            .terms
+            .iter_mut()
+            .find(|(n, ..)| n == name)
+            .ok_or_else(|| EnvError::InvalidTerm {
+                field: "rewards".into(),
+                message: format!("no reward term `{name}`; terms: {names:?}"),
+            })?;
+        if !weight.is_finite() {
+            return Err(EnvError::InvalidTerm {
+                field: format!("rewards.{name}.weight"),
+                message: format!("expected a finite weight, got {weight}"),
+            });
+        }
+        term.1 = weight;
+        Ok(())
     }
 
     pub(crate) fn reset(
@@ -568,5 +639,36 @@ impl CommandManager {
                 Self::resample(t, scene, &due, rngs);
             }
         }
+    }
+}
+
+/// Runs curriculum terms when envs reset and logs their state.
+pub struct CurriculumManager {
+    terms: Vec<(String, Box<dyn CurriculumTerm>)>,
+}
+
+impl CurriculumManager {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+        let mut terms = Vec::new();
+        for (name, t) in &cfg.curriculum.0 {
+            let ctx = context(doc, scene, cfg, format!("curriculum.{name}"));
+            terms.push((name.clone(), build_curriculum(&t.func, &ctx)?));
+        }
+        Ok(Self { terms })
+    }
+
+    pub(crate) fn compute(
+        &mut self,
+        env_ids: &[usize],
+        common_step_counter: u64,
+        rewards: &mut RewardManager,
+        log: &mut BTreeMap<String, f32>,
+    ) -> Result<(), EnvError> {
+        for (name, term) in &mut self.terms {
+            if let Some(v) = term.compute(env_ids, common_step_counter, rewards)? {
+                log.insert(format!("Curriculum/{name}"), v);
+            }
+        }
+        Ok(())
     }
 }

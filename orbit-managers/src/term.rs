@@ -172,3 +172,19 @@ registry!(
     /// Registration of a command term.
     CommandTermDef, CommandTerm, "command", command_terms, build_command
 );
+
+/// A curriculum term: runs when some envs reset and may change other managers (reward weights).
+pub trait CurriculumTerm: Send {
+    /// Updates the curriculum; returns a value to log as `Curriculum/<term>`, if any.
+    fn compute(
+        &mut self,
+        env_ids: &[usize],
+        common_step_counter: u64,
+        rewards: &mut crate::managers::RewardManager,
+    ) -> Result<Option<f32>, EnvError>;
+}
+
+registry!(
+    /// Registration of a curriculum term.
+    CurriculumTermDef, CurriculumTerm, "curriculum", curriculum_terms, build_curriculum
+);

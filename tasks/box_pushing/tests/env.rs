@@ -355,3 +355,80 @@ fn joint_offset_reset_and_object_in_robot_frame() {
     }
     assert_ne!(a[0], a[d], "envs draw different offsets");
 }
+
+/// Observation history (length 3) returns the last three joint-position observations oldest
+/// first; after a reset all three slots hold the new episode's first value.
+#[test]
+fn observation_history_shifts_and_refills_on_reset() {
+    let hist = "observations.policy.terms.q_hist=(func: \"joint_pos\", history_length: 3)";
+    let mut env = env(1, &[hist]);
+    env.reset().unwrap();
+    let d = env.observation("policy").unwrap().1;
+    assert_eq!(d, 35 + 21);
+    let current = |env: &ManagerBasedRlEnv| env.observation("policy").unwrap().0[..7].to_vec();
+    let slots = |env: &ManagerBasedRlEnv, k: usize| {
+        env.observation("policy").unwrap().0[35 + 7 * k..35 + 7 * (k + 1)].to_vec()
+    };
+    let q_reset = current(&env);
+    for k in 0..3 {
+        assert_eq!(slots(&env, k), q_reset, "slot {k} after reset");
+    }
+    let act = vec![0.5f32; env.action_dim()];
+    let mut seen = vec![q_reset.clone()];
+    for _ in 0..4 {
+        env.step(&act).unwrap();
+        seen.push(current(&env));
+    }
+    let m = seen.len();
+    for k in 0..3 {
+        assert_eq!(
+            slots(&env, k),
+            seen[m - 3 + k],
+            "slot {k} holds step {}",
+            m - 3 + k
+        );
+    }
+    assert_ne!(seen[m - 1], seen[m - 2], "the arm moved");
+    env.reset_idx(&[0]).unwrap();
+    env.step(&vec![0.0; env.action_dim()]).unwrap();
+    let after = current(&env);
+    for k in 0..3 {
+        assert_eq!(slots(&env, k), after, "slot {k} refilled after the reset");
+    }
+}
+
+/// `modify_reward_weight` switches a reward term's weight once the common step counter passes
+/// `num_steps` (it runs when envs reset) and logs the weight; a weight-0 term can be enabled.
+#[test]
+fn curriculum_changes_a_reward_weight() {
+    let cur = "curriculum.energy_up=(func: \"modify_reward_weight\", params: (term_name: \"energy\", weight: -5.0, num_steps: 3))";
+    let zero = "rewards.energy.weight=0.0";
+    let mut env = env(1, &[cur, zero, SEED0_TARGET]);
+    env.reset().unwrap();
+    let act = vec![0.5f32; env.action_dim()];
+    let mut rewards = Vec::new();
+    for k in 0..6 {
+        rewards.push(env.step(&act).unwrap().reward[0]);
+        if k == 1 || k == 4 {
+            env.reset_idx(&[0]).unwrap();
+            let w = env
+                .step(&vec![0.0; env.action_dim()])
+                .unwrap()
+                .extras
+                .log
+                .get("Curriculum/energy_up")
+                .copied();
+            assert_eq!(
+                w,
+                Some(if k == 1 { 0.0 } else { -5.0 }),
+                "weight logged after step {k}"
+            );
+        }
+    }
+    // With weight −5 the energy term adds −5 · Σu² · dt = −5 · 7 · 25 · 0.02 = −17.5 per step.
+    let gap = rewards[5] - rewards[1];
+    assert!(
+        gap < -17.0 && gap > -18.5,
+        "energy weight not applied: {gap}"
+    );
+}
