@@ -41,9 +41,7 @@ pub fn frame_pose(sim: &dyn PhysicsBackend, e: usize, frame: &str) -> Pose {
         .model
         .find_frame(frame)
         .unwrap_or_else(|| panic!("frame `{frame}` not in the model"));
-    let view = sim.articulation(0);
-    let i = e * layout.num_links() + link;
-    Pose::new(view.link_pos[i], view.link_quat[i]).mul_pose(&offset)
+    sim.articulation(0).frame_pose(e, link, &offset)
 }
 
 /// After writing the FK test configurations, every body origin is within 1e-4 m and every body

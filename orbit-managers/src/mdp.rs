@@ -705,7 +705,6 @@ impl Default for ObjectInRobotParams {
 /// `object_position_in_robot_root_frame`: the object's position in the robot's root frame.
 struct ObjectInRobot {
     robot: usize,
-    links: usize,
     object: usize,
 }
 
@@ -717,10 +716,7 @@ impl ObservationTerm for ObjectInRobot {
         let robot = env.scene.backend.articulation(self.robot);
         let object = env.scene.backend.rigid_object(self.object);
         for (e, row) in out.chunks_exact_mut(3).enumerate() {
-            let root = orbit_core::math::Pose::new(
-                robot.link_pos[e * self.links],
-                robot.link_quat[e * self.links],
-            );
+            let root = robot.link_pose(e, 0);
             row.copy_from_slice(&root.inverse().transform_point(object.pos[e]).to_array());
         }
     }
@@ -730,8 +726,7 @@ inventory::submit! { ObservationTermDef { name: "object_position_in_robot_root_f
     let p: ObjectInRobotParams = c.params()?;
     let robot = c.scene.articulation(&format!("{}.params.robot", c.field), &p.robot)?;
     let object = c.scene.rigid_object(&format!("{}.params.object", c.field), &p.object)?;
-    let links = c.scene.backend.layout().articulations[robot].num_links();
-    Ok(Box::new(ObjectInRobot { robot, links, object }))
+    Ok(Box::new(ObjectInRobot { robot, object }))
 } } }
 
 /// Parameters of `modify_reward_weight`.

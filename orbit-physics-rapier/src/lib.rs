@@ -305,6 +305,7 @@ impl PhysicsBackend for RapierBackend {
     fn articulation(&self, a: usize) -> ArticulationView<'_> {
         let b = &self.arts[a];
         ArticulationView {
+            num_links: b.links,
             joint_pos: &b.joint_pos,
             joint_vel: &b.joint_vel,
             bias_forces: &b.bias,

@@ -120,6 +120,8 @@ pub enum PhysicsError {
 /// Batched state of one articulation: each slice holds `num_envs` rows.
 #[derive(Clone, Copy, Debug)]
 pub struct ArticulationView<'a> {
+    /// Links per env (row length of the link arrays).
+    pub num_links: usize,
     /// Joint positions, `num_envs × num_dofs`.
     pub joint_pos: &'a [f32],
     /// Joint velocities, `num_envs × num_dofs`.
@@ -137,6 +139,24 @@ pub struct ArticulationView<'a> {
     pub link_lin_vel: &'a [Vec3],
     /// Link angular velocities (world axes), `num_envs × num_links`.
     pub link_ang_vel: &'a [Vec3],
+}
+
+impl ArticulationView<'_> {
+    /// Pose of link `link` in env `e`.
+    pub fn link_pose(&self, e: usize, link: usize) -> crate::math::Pose {
+        let i = e * self.num_links + link;
+        crate::math::Pose::new(self.link_pos[i], self.link_quat[i])
+    }
+
+    /// Pose of a frame rigidly attached to `link` at `offset`, in env `e`.
+    pub fn frame_pose(
+        &self,
+        e: usize,
+        link: usize,
+        offset: &crate::math::Pose,
+    ) -> crate::math::Pose {
+        self.link_pose(e, link).mul_pose(offset)
+    }
 }
 
 /// Batched state of one free rigid object: one entry per env.

@@ -71,7 +71,6 @@ impl Default for BoxPushingParams {
 #[derive(Clone)]
 struct Refs {
     robot: usize,
-    links: usize,
     object: usize,
     command: String,
     rod_tip: (usize, Pose),
@@ -103,7 +102,6 @@ impl Refs {
         }
         Ok(Self {
             robot,
-            links: ctx.scene.backend.layout().articulations[robot].num_links(),
             object: ctx.scene.rigid_object(&f("object"), &p.object)?,
             command: p.command,
             rod_tip: ctx.scene.frame(&f("rod_tip"), robot, &p.rod_tip)?,
@@ -114,9 +112,10 @@ impl Refs {
     }
 
     fn frame(&self, env: &EnvView<'_>, e: usize, (link, offset): (usize, Pose)) -> Pose {
-        let v = env.scene.backend.articulation(self.robot);
-        let i = e * self.links + link;
-        Pose::new(v.link_pos[i], v.link_quat[i]).mul_pose(&offset)
+        env.scene
+            .backend
+            .articulation(self.robot)
+            .frame_pose(e, link, &offset)
     }
 
     fn target(&self, env: &EnvView<'_>, e: usize) -> (Vec3, Quat) {

@@ -297,8 +297,10 @@ fn differential_ik_reaches_a_tcp_target() {
     let tcp = |env: &ManagerBasedRlEnv| {
         let layout = &env.scene.backend.layout().articulations[0];
         let (link, offset) = layout.model.find_frame("tcp").unwrap();
-        let v = env.scene.backend.articulation(0);
-        orbit_core::math::Pose::new(v.link_pos[link], v.link_quat[link]).mul_pose(&offset)
+        env.scene
+            .backend
+            .articulation(0)
+            .frame_pose(0, link, &offset)
     };
     let start = tcp(&env);
     let target = start.pos + glam::Vec3::new(0.03, 0.0, 0.1);
