@@ -333,9 +333,13 @@ pub struct ResetRootParams {
     /// Yaw offset range (rad).
     #[serde(default)]
     pub yaw_range: (f32, f32),
+    /// Linear velocity offset ranges `(x, y, z)` added to the default velocity (m/s).
+    #[serde(default)]
+    pub lin_vel_range: [(f32, f32); 3],
 }
 
-/// `reset_root_state_uniform`: default root state plus uniform position and yaw offsets.
+/// `reset_root_state_uniform`: default root state plus uniform position, yaw and linear
+/// velocity offsets.
 struct ResetRootUniform {
     object: usize,
     p: ResetRootParams,
@@ -360,6 +364,12 @@ impl EventTerm for ResetRootUniform {
                     r.uniform_range(self.p.pos_range[2].0, self.p.pos_range[2].1),
                 );
                 let yaw = r.uniform_range(self.p.yaw_range.0, self.p.yaw_range.1);
+                let [vx, vy, vz] = self.p.lin_vel_range;
+                s.lin_vel += Vec3::new(
+                    r.uniform_range(vx.0, vx.1),
+                    r.uniform_range(vy.0, vy.1),
+                    r.uniform_range(vz.0, vz.1),
+                );
                 s.pose.pos += off;
                 s.pose.rot = (Quat::from_rotation_z(yaw) * s.pose.rot).normalize();
                 s
@@ -761,4 +771,51 @@ impl CurriculumTerm for ModifyRewardWeight {
 
 inventory::submit! { CurriculumTermDef { name: "modify_reward_weight", build: |c| {
     Ok(Box::new(ModifyRewardWeight(c.params()?)))
+} } }
+
+/// Parameters of `randomize_rigid_body_material`.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialParams {
+    /// Rigid-object name.
+    pub asset: String,
+    /// Friction coefficients are drawn uniformly from this range per env.
+    pub friction_range: (f32, f32),
+}
+
+/// `randomize_rigid_body_material`: a uniform friction coefficient per env for every shape of a
+/// rigid object (shape priorities are kept, so a prioritised shape's new friction still wins).
+struct RandomizeMaterial {
+    object: usize,
+    range: (f32, f32),
+}
+
+impl EventTerm for RandomizeMaterial {
+    fn apply(
+        &mut self,
+        scene: &mut Scene,
+        env_ids: &[usize],
+        rng: &mut EnvRngs,
+    ) -> Result<(), EnvError> {
+        let values: Vec<f32> = env_ids
+            .iter()
+            .map(|&e| rng.get(e).uniform_range(self.range.0, self.range.1))
+            .collect();
+        scene.backend.set_friction(
+            orbit_core::physics::BodyRef::RigidObject(self.object),
+            env_ids,
+            &values,
+        )?;
+        Ok(())
+    }
+}
+
+inventory::submit! { EventTermDef { name: "randomize_rigid_body_material", build: |c| {
+    let p: MaterialParams = c.params()?;
+    let (lo, hi) = p.friction_range;
+    if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
+        return Err(c.error(format!("params.friction_range must satisfy 0 <= lo <= hi, got ({lo}, {hi})")));
+    }
+    let object = c.scene.rigid_object(&format!("{}.params.asset", c.field), &p.asset)?;
+    Ok(Box::new(RandomizeMaterial { object, range: p.friction_range }))
 } } }

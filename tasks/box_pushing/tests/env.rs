@@ -434,3 +434,39 @@ fn curriculum_changes_a_reward_weight() {
         "energy weight not applied: {gap}"
     );
 }
+
+/// Friction randomisation reaches the physics: `reset_root_state_uniform` moves the box 15 cm
+/// away from the rod and launches it at 0.5 m/s along +y; with its default plate friction 0.3 it
+/// stops after v²/(2 μ g) = 42.5 mm, with friction drawn from (0, 0) it keeps sliding at 0.5 m/s.
+#[test]
+fn friction_randomisation_changes_sliding() {
+    let launch = "events.launch=(func: \"reset_root_state_uniform\", params: (asset: \"box\", pos_range: ((0.15, 0.15), (0.0, 0.0), (0.0, 0.0)), lin_vel_range: ((0.0, 0.0), (0.5, 0.5), (0.0, 0.0))), mode: Reset)";
+    let slippery = "events.ice=(func: \"randomize_rigid_body_material\", params: (asset: \"box\", friction_range: (0.0, 0.0)), mode: Startup)";
+    let slide = |extra: &[&str]| {
+        let mut args = vec![launch];
+        args.extend_from_slice(extra);
+        let mut env = env(1, &args);
+        env.reset().unwrap();
+        let y0 = env.scene.backend.rigid_object(0).pos[0].y;
+        let zero = vec![0.0; env.action_dim()];
+        for _ in 0..10 {
+            env.step(&zero).unwrap();
+        }
+        env.scene.backend.rigid_object(0).pos[0].y - y0
+    };
+    let with_friction = slide(&[]);
+    let without = slide(&[slippery]);
+    let stop = 0.5f32 * 0.5 / (2.0 * 0.3 * 9.81);
+    println!(
+        "box slides {:.4} m with friction (ideal {stop:.4}), {:.4} m frictionless in 0.2 s",
+        with_friction, without
+    );
+    assert!(
+        (with_friction - stop).abs() < 0.1 * stop,
+        "slid {with_friction} m, expected {stop} m"
+    );
+    assert!(
+        (without - 0.1).abs() < 0.005,
+        "frictionless box slid {without} m in 0.2 s"
+    );
+}
