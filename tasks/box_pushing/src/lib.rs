@@ -8,9 +8,11 @@
 #![warn(missing_docs)]
 
 mod command;
+mod ik;
 mod rewards;
 
 pub use command::{SUCCESS_ANGLE, SUCCESS_DISTANCE, TargetPoseParams};
+pub use ik::{ArmIkParams, IkSolution, OfflineIk};
 pub use rewards::*;
 
 const CONFIG: &str = include_str!("../config/box_pushing_torque.ron");
@@ -49,6 +51,24 @@ const TASK_SPACE: &[&str] = &[
     "scene.overrides=[\"articulations[0].actuators.arm.stiffness=400.0\", \"articulations[0].actuators.arm.damping=80.0\"]",
     "actions.arm=(func: \"differential_ik\", params: (joint_names: [\"panda_joint[1-7]\"], body_name: \"tcp\", scale: 0.02, command_type: Pose, use_relative_mode: true, ik_method: Dls(lambda_val: 0.01), compensate_bias: true))",
 ];
+
+/// Random initial box pose (Fancy Gym's `random_init`): the box is placed uniformly in
+/// x ∈ [0.3, 0.6], y ∈ [−0.45, 0.45] with a uniform yaw, then the arm is placed by Fancy Gym's
+/// IK with the tcp 15 cm above the box, rod pointing down.
+const RANDOM_INIT: &[&str] = &[
+    "events.random_box=(func: \"reset_root_state_uniform\", params: (asset: \"box\", pos_range: ((-0.1, 0.2), (-0.75, 0.15), (0.0, 0.0)), yaw_range: (0.0, 6.283185307)), mode: Reset)",
+    "events.arm_ik=(func: \"reset_arm_by_ik\", mode: Reset)",
+];
+
+inventory::submit! {
+    orbit_managers::TaskDef {
+        id: "BoxPushing-Torque-RandomInit-Franka-v0",
+        description: "Franka box pushing, torque law, Dense reward, random initial box pose with the arm placed by IK",
+        file_name: FILE,
+        config: CONFIG,
+        overrides: RANDOM_INIT,
+    }
+}
 
 inventory::submit! {
     orbit_managers::TaskDef {
