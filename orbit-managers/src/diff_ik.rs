@@ -270,14 +270,8 @@ impl ActionTerm for DiffIkAction {
             .backend
             .set_joint_position_targets(art, &self.targets)?;
         if self.p.compensate_bias {
-            let bias = scene.backend.articulation(art).bias_forces;
-            self.feed_forward.fill(0.0);
-            for e in 0..scene.num_envs() {
-                for &j in &self.sel.dofs {
-                    self.feed_forward[e * n + j] = bias[e * n + j];
-                }
-            }
-            scene.backend.set_joint_efforts(art, &self.feed_forward)?;
+            self.sel
+                .apply_bias_feed_forward(scene, &mut self.feed_forward)?;
         }
         Ok(())
     }

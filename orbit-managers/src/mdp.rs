@@ -66,6 +66,28 @@ impl JointSel {
     }
 }
 
+impl JointSel {
+    /// Writes the backend's bias forces of the selected joints (zero elsewhere) into `buf`
+    /// (`num_envs × num_dofs`) and applies them as feed-forward efforts: gravity and Coriolis
+    /// compensation beside position targets.
+    pub fn apply_bias_feed_forward(
+        &self,
+        scene: &mut Scene,
+        buf: &mut [f32],
+    ) -> Result<(), EnvError> {
+        let n = self.num_dofs;
+        let bias = scene.backend.articulation(self.articulation).bias_forces;
+        buf.fill(0.0);
+        for e in 0..scene.num_envs() {
+            for &j in &self.dofs {
+                buf[e * n + j] = bias[e * n + j];
+            }
+        }
+        scene.backend.set_joint_efforts(self.articulation, buf)?;
+        Ok(())
+    }
+}
+
 /// `joint_pos_rel` / `joint_vel_rel`: selected joint positions or velocities minus defaults.
 struct JointRel {
     sel: JointSel,
@@ -111,26 +133,15 @@ fn joint_rel(ctx: &TermContext<'_>, velocity: bool) -> Result<Box<dyn Observatio
 inventory::submit! { ObservationTermDef { name: "joint_pos_rel", build: |c| joint_rel(c, false) } }
 inventory::submit! { ObservationTermDef { name: "joint_vel_rel", build: |c| joint_rel(c, true) } }
 
-/// `joint_pos` / `joint_vel`: absolute joint state.
-struct JointAbs(JointRel);
-
-impl ObservationTerm for JointAbs {
-    fn dim(&self) -> usize {
-        self.0.dim()
-    }
-    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
-        self.0.compute(env, out);
-    }
-}
-
+/// `joint_pos` / `joint_vel`: absolute joint state (a `JointRel` with zero defaults).
 fn joint_abs(ctx: &TermContext<'_>, velocity: bool) -> Result<Box<dyn ObservationTerm>, EnvError> {
     let sel = JointSel::resolve(ctx, &ctx.params()?)?;
     let default = vec![0.0; sel.num_dofs];
-    Ok(Box::new(JointAbs(JointRel {
+    Ok(Box::new(JointRel {
         sel,
         default,
         velocity,
-    })))
+    }))
 }
 
 inventory::submit! { ObservationTermDef { name: "joint_pos", build: |c| joint_abs(c, false) } }
@@ -497,19 +508,8 @@ impl ActionTerm for JointAction {
                     .backend
                     .set_joint_position_targets(self.sel.articulation, &self.full)?;
                 if self.p.compensate_bias {
-                    let bias = scene
-                        .backend
-                        .articulation(self.sel.articulation)
-                        .bias_forces;
-                    self.feed_forward.fill(0.0);
-                    for e in 0..scene.num_envs() {
-                        for &j in &self.sel.dofs {
-                            self.feed_forward[e * n + j] = bias[e * n + j];
-                        }
-                    }
-                    scene
-                        .backend
-                        .set_joint_efforts(self.sel.articulation, &self.feed_forward)?;
+                    self.sel
+                        .apply_bias_feed_forward(scene, &mut self.feed_forward)?;
                 }
             }
             JointActionKind::Effort => scene

@@ -16,6 +16,9 @@ use rapier3d::prelude::*;
 
 use crate::hooks::{FrictionPriority, encode_material};
 
+/// Most degrees of freedom of one articulation (size of the stack buffer used for state writes).
+const MAX_DOFS: usize = 64;
+
 /// Per-env handles and scratch of one articulation.
 pub(crate) struct EnvArticulation {
     /// Rigid body of each link.
@@ -250,6 +253,16 @@ fn build_articulation(
             dof_link.push(i);
         }
     }
+    if dof_link.len() > MAX_DOFS {
+        return Err(PhysicsError::Unsupported {
+            backend: "rapier".into(),
+            reason: format!(
+                "articulation `{}` has {} dofs; at most {MAX_DOFS} are supported",
+                desc.name,
+                dof_link.len()
+            ),
+        });
+    }
     let multibody = multibody.ok_or_else(|| PhysicsError::Unsupported {
         backend: "rapier".into(),
         reason: format!(
@@ -373,9 +386,8 @@ impl EnvWorld {
             .multibody_joints
             .get_multibody_mut(art.multibody)
             .expect("multibody exists");
-        let mut disp = [0.0f32; 64];
+        let mut disp = [0.0f32; MAX_DOFS];
         let n = mb.ndofs();
-        debug_assert!(n <= disp.len());
         for d in 0..q.len() {
             let link = mb.link(art.dof_mb_link[d]).expect("link exists");
             disp[link.assembly_id()] = q[d] - link.joint().coords()[art.dof_axis[d]];

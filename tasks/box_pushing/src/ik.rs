@@ -221,8 +221,6 @@ struct ArmIk {
     robot: usize,
     object: usize,
     p: ArmIkParams,
-    /// The last solutions (for inspection and tests).
-    pub last: Vec<IkSolution>,
 }
 
 impl EventTerm for ArmIk {
@@ -237,12 +235,10 @@ impl EventTerm for ArmIk {
         let d = Quat::from_xyzw(x, y, z, w).normalize();
         let dofs = 7;
         let mut pos = Vec::with_capacity(env_ids.len() * dofs);
-        self.last.clear();
         for &e in env_ids {
             let target = boxes[e] + Vec3::new(self.p.offset.0, self.p.offset.1, self.p.offset.2);
             let sol = self.ik.solve(target, d, self.p.q_start);
             pos.extend_from_slice(&sol.q);
-            self.last.push(sol);
         }
         let vel = vec![0.0; pos.len()];
         scene
@@ -278,7 +274,6 @@ fn build(ctx: &TermContext<'_>) -> Result<Box<dyn EventTerm>, EnvError> {
         robot,
         object,
         p,
-        last: Vec::new(),
     }))
 }
 
