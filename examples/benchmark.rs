@@ -7,12 +7,15 @@
 //!
 //! The arm runs Fancy Gym's torque law with a sinusoidal normalised action per joint
 //! (`τ = clip(10 a + bias, ±τ_max)`), so the multibody, the box–table contacts and the bias
-//! forces are all exercised every step.
+//! forces are all exercised every step. The full-env column steps the registered task with
+//! the same kind of actions; its `managers / physics` ratio and the per-phase table come from the
+//! env's own step timings.
 
 use std::time::Instant;
 
 use clap::Parser;
 use orbit::core::physics::{SimCfg, build_backend};
+use orbit::managers::StepTimings;
 
 #[derive(Parser)]
 #[command(about = "Env-steps/s of the box-pushing scene per physics backend")]
@@ -44,8 +47,11 @@ struct Args {
 }
 
 /// Seconds for `args.steps` steps of the full manager-based env (`--task`) with the same
-/// sinusoidal actions (after 20 warm-up steps).
-fn full_env_seconds(args: &Args, n: usize) -> Result<f64, Box<dyn std::error::Error>> {
+/// sinusoidal actions (after 20 warm-up steps), and the env's own per-phase timings of them.
+fn full_env_seconds(
+    args: &Args,
+    n: usize,
+) -> Result<(f64, StepTimings), Box<dyn std::error::Error>> {
     let mut overrides = orbit::run_overrides(Some(n), None, Some(&args.backend), &[]);
     overrides.push(format!("sim.num_threads={}", args.threads));
     overrides.push(format!("sim.solver_iterations={}", args.solver_iterations));
@@ -68,9 +74,10 @@ fn full_env_seconds(args: &Args, n: usize) -> Result<f64, Box<dyn std::error::Er
         Ok(())
     };
     run(&mut env, 20, 0)?;
+    env.timings_mut().clear();
     let start = Instant::now();
     run(&mut env, args.steps, 20)?;
-    Ok(start.elapsed().as_secs_f64())
+    Ok((start.elapsed().as_secs_f64(), *env.timings()))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -92,11 +99,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         args.backend, args.decimation, sim.dt
     );
     println!(
-        "| envs | physics env-steps/s | per thread | full env env-steps/s | manager overhead |"
+        "| envs | physics env-steps/s | per thread | full env env-steps/s | managers / physics |"
     );
     println!(
-        "|-----:|--------------------:|-----------:|---------------------:|-----------------:|"
+        "|-----:|--------------------:|-----------:|---------------------:|-------------------:|"
     );
+    let mut phases = Vec::new();
     for &n in &args.num_envs {
         let mut backend = build_backend(&scene, n, &sim)?;
         let dofs = backend.layout().articulations[0].num_dofs();
@@ -127,13 +135,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         run(&mut backend, args.steps, 20)?;
         let secs = start.elapsed().as_secs_f64();
         let rate = (n * args.steps) as f64 / secs;
-        let env_secs = full_env_seconds(&args, n)?;
+        let (env_secs, timings) = full_env_seconds(&args, n)?;
         let env_rate = (n * args.steps) as f64 / env_secs;
+        let overhead = timings.managers().as_secs_f64() / timings.physics.as_secs_f64();
         println!(
-            "| {n:>4} | {rate:>19.0} | {:>10.0} | {env_rate:>20.0} | {:>15.1} % |",
+            "| {n:>4} | {rate:>19.0} | {:>10.0} | {env_rate:>20.0} | {:>16.1} % |",
             rate / threads as f64,
-            (env_secs / secs - 1.0) * 100.0
+            overhead * 100.0
         );
+        phases.push((n, timings));
+    }
+    // Where a full env step's time goes, measured inside the env (same runs as above).
+    println!();
+    let names: Vec<&str> = StepTimings::default()
+        .phases()
+        .iter()
+        .map(|p| p.0)
+        .collect();
+    println!("µs per env step by phase (full env):");
+    println!("| envs | {} |", names.join(" | "));
+    println!("|-----:|{}", "-----:|".repeat(names.len()));
+    for (n, t) in phases {
+        let cells: Vec<String> = t
+            .phases()
+            .iter()
+            .map(|(_, d)| format!("{:.1}", d.as_secs_f64() * 1e6 / t.steps as f64))
+            .collect();
+        println!("| {n:>4} | {} |", cells.join(" | "));
     }
     Ok(())
 }

@@ -68,7 +68,10 @@ pub fn bundled_scene(name: &str, overrides: &[String]) -> Result<SceneDesc, Asse
     let file = format!("{name} (bundled)");
     let cfg: SceneCfg = orbit_core::config::from_str(text, &file, overrides)?;
     cfg.resolve(&model_loader(None))
-        .map_err(|source| AssetError::Scene { file, source })
+        .map_err(|source| AssetError::Scene {
+            file,
+            source: Box::new(source),
+        })
 }
 
 /// Loads a scene config from a RON file (with includes and overrides) and resolves it; URDF
@@ -78,7 +81,7 @@ pub fn load_scene(path: &Path, overrides: &[String]) -> Result<SceneDesc, AssetE
     cfg.resolve(&model_loader(path.parent()))
         .map_err(|source| AssetError::Scene {
             file: path.display().to_string(),
-            source,
+            source: Box::new(source),
         })
 }
 

@@ -14,8 +14,8 @@ pub enum AssetError {
     Scene {
         /// The scene config file.
         file: String,
-        /// What does not resolve, with the field path.
-        source: orbit_core::scene::SceneError,
+        /// What does not resolve, with the field path (boxed: it is large and rare).
+        source: Box<orbit_core::scene::SceneError>,
     },
     /// The file could not be read.
     #[error("cannot read `{file}`: {source}")]

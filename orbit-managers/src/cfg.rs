@@ -1,4 +1,5 @@
-//! The environment config (Isaac Lab `ManagerBasedRLEnvCfg`), read from RON. Terms are given by
+//! Environment configs (Isaac Lab `ManagerBasedEnvCfg` and `ManagerBasedRLEnvCfg`), read from
+//! RON. Terms are given by
 //! name in ordered maps (`{"joint_pos": (func: "joint_pos_rel"), ...}`); their `params` stay
 //! untyped here and are deserialised by each term into its own parameter type.
 
@@ -181,7 +182,38 @@ pub struct CommandTermCfg {
     pub resampling_time_range: (f32, f32),
 }
 
-/// A manager-based RL environment config.
+/// A manager-based environment config (Isaac Lab `ManagerBasedEnvCfg`): scene, physics,
+/// actions, observations, events and (optionally, for observation terms that read them)
+/// commands. [`RlEnvCfg`] adds the episode, rewards, terminations and curriculum.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvCfg {
+    /// Base seed of every per-env random stream.
+    #[serde(default)]
+    pub seed: u64,
+    /// Number of environments.
+    pub num_envs: usize,
+    /// Physics steps per env step.
+    pub decimation: usize,
+    /// Physics settings, including the backend name.
+    #[serde(default)]
+    pub sim: SimCfg,
+    /// The scene.
+    pub scene: SceneSource,
+    /// Action terms (concatenated in order).
+    pub actions: Terms<FuncTermCfg>,
+    /// Observation groups.
+    pub observations: Terms<ObservationGroupCfg>,
+    /// Event terms.
+    #[serde(default)]
+    pub events: Terms<EventTermCfg>,
+    /// Command terms.
+    #[serde(default)]
+    pub commands: Terms<CommandTermCfg>,
+}
+
+/// A manager-based RL environment config (Isaac Lab `ManagerBasedRLEnvCfg`): the fields of
+/// [`EnvCfg`] plus the episode length, rewards, terminations and curriculum.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RlEnvCfg {
@@ -219,4 +251,21 @@ pub struct RlEnvCfg {
     /// Curriculum terms (run when envs reset).
     #[serde(default)]
     pub curriculum: Terms<FuncTermCfg>,
+}
+
+impl RlEnvCfg {
+    /// The base-environment part of this config.
+    pub fn base(&self) -> EnvCfg {
+        EnvCfg {
+            seed: self.seed,
+            num_envs: self.num_envs,
+            decimation: self.decimation,
+            sim: self.sim.clone(),
+            scene: self.scene.clone(),
+            actions: self.actions.clone(),
+            observations: self.observations.clone(),
+            events: self.events.clone(),
+            commands: self.commands.clone(),
+        }
+    }
 }

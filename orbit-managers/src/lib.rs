@@ -3,21 +3,24 @@
 //! An environment is a RON config: a scene, physics settings, and named terms for actions,
 //! observations, rewards, terminations, events and commands. Terms are registered by name with
 //! `inventory` (built-ins in [`mdp`], task crates add their own) and get typed parameters from
-//! the config. [`ManagerBasedRlEnv`] steps all envs in Isaac Lab's order.
+//! the config. [`ManagerBasedEnv`] steps a scene through actions, events and observations;
+//! [`ManagerBasedRlEnv`] adds rewards, terminations, episodes and curricula, in Isaac Lab's order.
 
 #![warn(missing_docs)]
 
+mod base_env;
 pub mod cfg;
 pub mod diff_ik;
-mod env;
 mod error;
 pub mod managers;
 pub mod mdp;
+mod rl_env;
 mod scene;
 pub mod task;
 pub mod term;
 
-pub use env::{EnvRngs, EnvView, Extras, ManagerBasedRlEnv, StepResult};
+pub use base_env::{EnvRngs, EnvView, ManagerBasedEnv, StepTimings};
 pub use error::EnvError;
+pub use rl_env::{Extras, ManagerBasedRlEnv, StepResult};
 pub use scene::Scene;
 pub use task::{TaskDef, make, tasks};

@@ -4,8 +4,10 @@ use std::collections::BTreeMap;
 
 use orbit_core::config::{Node, node_at};
 
-use crate::cfg::{EventMode, NoiseCfg, RlEnvCfg};
-use crate::env::{EnvRngs, EnvView};
+use crate::base_env::{EnvRngs, EnvView};
+use crate::cfg::{
+    EnvCfg, EventMode, FuncTermCfg, NoiseCfg, RewardTermCfg, TerminationTermCfg, Terms,
+};
 use crate::error::EnvError;
 use crate::scene::Scene;
 use crate::term::*;
@@ -14,7 +16,7 @@ use crate::term::*;
 pub(crate) fn context<'a>(
     doc: &'a Node,
     scene: &'a Scene,
-    cfg: &RlEnvCfg,
+    cfg: &EnvCfg,
     field: String,
 ) -> TermContext<'a> {
     let params = node_at(doc, &format!("{field}.params"));
@@ -34,7 +36,7 @@ pub(crate) fn context<'a>(
 pub(crate) fn context_after<'a>(
     doc: &'a Node,
     scene: &'a Scene,
-    cfg: &RlEnvCfg,
+    cfg: &EnvCfg,
     field: String,
     actions: &ActionManager,
     commands: &CommandManager,
@@ -64,7 +66,7 @@ pub struct ActionManager {
 }
 
 impl ActionManager {
-    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &EnvCfg) -> Result<Self, EnvError> {
         let mut terms = Vec::new();
         for (name, t) in &cfg.actions.0 {
             let ctx = context(doc, scene, cfg, format!("actions.{name}"));
@@ -186,7 +188,7 @@ impl ObservationManager {
     pub(crate) fn new(
         doc: &Node,
         scene: &Scene,
-        cfg: &RlEnvCfg,
+        cfg: &EnvCfg,
         actions: &ActionManager,
         commands: &CommandManager,
     ) -> Result<Self, EnvError> {
@@ -298,12 +300,13 @@ impl RewardManager {
     pub(crate) fn new(
         doc: &Node,
         scene: &Scene,
-        cfg: &RlEnvCfg,
+        cfg: &EnvCfg,
+        reward_terms: &Terms<RewardTermCfg>,
         actions: &ActionManager,
         commands: &CommandManager,
     ) -> Result<Self, EnvError> {
         let mut terms = Vec::new();
-        for (name, t) in &cfg.rewards.0 {
+        for (name, t) in &reward_terms.0 {
             if !t.weight.is_finite() {
                 return Err(EnvError::InvalidTerm {
                     field: format!("rewards.{name}.weight"),
@@ -342,6 +345,18 @@ impl RewardManager {
                 self.episode_sums[k][e] += v;
             }
         }
+    }
+
+    /// The unweighted value of every term on the current state, weight-0 terms included
+    /// (Isaac Lab's per-term inspection; `step` does not use it).
+    pub(crate) fn evaluate_terms(&mut self, env: &EnvView<'_>) -> Vec<(String, Vec<f32>)> {
+        self.terms
+            .iter_mut()
+            .map(|(name, _, term)| {
+                term.compute(env, &mut self.buf);
+                (name.clone(), self.buf.clone())
+            })
+            .collect()
     }
 
     /// The weight of a reward term.
@@ -410,13 +425,14 @@ impl TerminationManager {
     pub(crate) fn new(
         doc: &Node,
         scene: &Scene,
-        cfg: &RlEnvCfg,
+        cfg: &EnvCfg,
+        termination_terms: &Terms<TerminationTermCfg>,
         actions: &ActionManager,
         commands: &CommandManager,
     ) -> Result<Self, EnvError> {
         let n = scene.num_envs();
         let mut terms = Vec::new();
-        for (name, t) in &cfg.terminations.0 {
+        for (name, t) in &termination_terms.0 {
             let ctx = context_after(
                 doc,
                 scene,
@@ -470,6 +486,8 @@ struct EventEntry {
     interval: Option<(f32, f32)>,
     term: Box<dyn EventTerm>,
     time_left: Vec<f32>,
+    /// Envs due this step (reused, so stepping does not allocate).
+    due: Vec<usize>,
 }
 
 /// Applies event terms by mode.
@@ -478,7 +496,7 @@ pub struct EventManager {
 }
 
 impl EventManager {
-    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &EnvCfg) -> Result<Self, EnvError> {
         let n = scene.num_envs();
         let mut terms = Vec::new();
         for (name, t) in &cfg.events.0 {
@@ -491,6 +509,7 @@ impl EventManager {
                 interval: t.interval_range_s,
                 term: build_event(&t.func, &ctx)?,
                 time_left: vec![0.0; n],
+                due: Vec::with_capacity(n),
             });
         }
         Ok(Self { terms })
@@ -531,16 +550,16 @@ impl EventManager {
             let (EventMode::Interval, Some((lo, hi))) = (entry.mode, entry.interval) else {
                 continue;
             };
-            let mut due = Vec::new();
+            entry.due.clear();
             for (e, t) in entry.time_left.iter_mut().enumerate() {
                 *t -= dt;
                 if *t <= 0.0 {
                     *t = rngs.get(e).uniform_range(lo, hi);
-                    due.push(e);
+                    entry.due.push(e);
                 }
             }
-            if !due.is_empty() {
-                entry.term.apply(scene, &due, rngs)?;
+            if !entry.due.is_empty() {
+                entry.term.apply(scene, &entry.due, rngs)?;
             }
         }
         Ok(())
@@ -553,6 +572,8 @@ pub(crate) struct CommandEntry {
     range: (f32, f32),
     pub(crate) term: Box<dyn CommandTerm>,
     time_left: Vec<f32>,
+    /// Envs due for resampling this step (reused, so stepping does not allocate).
+    due: Vec<usize>,
 }
 
 /// Holds command terms and their resampling timers.
@@ -561,7 +582,7 @@ pub struct CommandManager {
 }
 
 impl CommandManager {
-    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &EnvCfg) -> Result<Self, EnvError> {
         let n = scene.num_envs();
         let mut terms = Vec::new();
         for (name, t) in &cfg.commands.0 {
@@ -577,6 +598,7 @@ impl CommandManager {
                 range: t.resampling_time_range,
                 term: build_command(&t.func, &ctx)?,
                 time_left: vec![0.0; n],
+                due: Vec::with_capacity(n),
             });
         }
         Ok(Self { terms })
@@ -595,12 +617,18 @@ impl CommandManager {
         self.terms.iter().map(|c| c.name.as_str())
     }
 
-    fn resample(term: &mut CommandEntry, scene: &Scene, env_ids: &[usize], rngs: &mut EnvRngs) {
-        let (lo, hi) = term.range;
+    fn resample(
+        range: (f32, f32),
+        time_left: &mut [f32],
+        term: &mut dyn CommandTerm,
+        scene: &Scene,
+        env_ids: &[usize],
+        rngs: &mut EnvRngs,
+    ) {
         for &e in env_ids {
-            term.time_left[e] = rngs.get(e).uniform_range(lo, hi);
+            time_left[e] = rngs.get(e).uniform_range(range.0, range.1);
         }
-        term.term.resample(scene, env_ids, rngs);
+        term.resample(scene, env_ids, rngs);
     }
 
     pub(crate) fn update_metrics(&mut self, scene: &Scene) {
@@ -622,21 +650,28 @@ impl CommandManager {
                     env_ids.iter().map(|&e| values[e]).sum::<f32>() / env_ids.len().max(1) as f32;
                 log.insert(format!("Metrics/{}/{metric}", t.name), mean);
             }
-            Self::resample(t, scene, env_ids, rngs);
+            Self::resample(
+                t.range,
+                &mut t.time_left,
+                &mut *t.term,
+                scene,
+                env_ids,
+                rngs,
+            );
         }
     }
 
     pub(crate) fn compute(&mut self, scene: &Scene, dt: f32, rngs: &mut EnvRngs) {
         for t in &mut self.terms {
-            let mut due = Vec::new();
+            t.due.clear();
             for (e, left) in t.time_left.iter_mut().enumerate() {
                 *left -= dt;
                 if *left <= 0.0 {
-                    due.push(e);
+                    t.due.push(e);
                 }
             }
-            if !due.is_empty() {
-                Self::resample(t, scene, &due, rngs);
+            if !t.due.is_empty() {
+                Self::resample(t.range, &mut t.time_left, &mut *t.term, scene, &t.due, rngs);
             }
         }
     }
@@ -648,9 +683,14 @@ pub struct CurriculumManager {
 }
 
 impl CurriculumManager {
-    pub(crate) fn new(doc: &Node, scene: &Scene, cfg: &RlEnvCfg) -> Result<Self, EnvError> {
+    pub(crate) fn new(
+        doc: &Node,
+        scene: &Scene,
+        cfg: &EnvCfg,
+        curriculum_terms: &Terms<FuncTermCfg>,
+    ) -> Result<Self, EnvError> {
         let mut terms = Vec::new();
-        for (name, t) in &cfg.curriculum.0 {
+        for (name, t) in &curriculum_terms.0 {
             let ctx = context(doc, scene, cfg, format!("curriculum.{name}"));
             terms.push((name.clone(), build_curriculum(&t.func, &ctx)?));
         }

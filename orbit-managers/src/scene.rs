@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use orbit_core::physics::PhysicsBackend;
-use orbit_core::scene::{SceneDesc, grid_env_origins, match_joints};
+use orbit_core::scene::{SceneDesc, grid_env_origins, match_names};
 
 use crate::error::EnvError;
 
@@ -64,12 +64,19 @@ impl Scene {
         patterns: &[String],
     ) -> Result<Vec<usize>, EnvError> {
         let layout = &self.backend.layout().articulations[articulation];
-        match_joints(field, &layout.name, &layout.joint_names, patterns).map_err(|e| {
-            EnvError::InvalidTerm {
-                field: field.to_string(),
-                message: e.to_string(),
-            }
-        })
+        select(field, &layout.name, "joint", &layout.joint_names, patterns)
+    }
+
+    /// Link indices of an articulation selected by regexes (full match, link order); every
+    /// pattern must match.
+    pub fn bodies(
+        &self,
+        field: &str,
+        articulation: usize,
+        patterns: &[String],
+    ) -> Result<Vec<usize>, EnvError> {
+        let layout = &self.backend.layout().articulations[articulation];
+        select(field, &layout.name, "body", &layout.link_names, patterns)
     }
 
     /// `(link, offset)` of a named frame or link of an articulation.
@@ -91,4 +98,18 @@ impl Scene {
                 ),
             })
     }
+}
+
+/// [`match_names`] as a term error.
+fn select(
+    field: &str,
+    entity: &str,
+    kind: &'static str,
+    names: &[String],
+    patterns: &[String],
+) -> Result<Vec<usize>, EnvError> {
+    match_names(field, entity, kind, names, patterns).map_err(|e| EnvError::InvalidTerm {
+        field: field.to_string(),
+        message: e.to_string(),
+    })
 }

@@ -1,7 +1,7 @@
 //! The task registry: task ids (`BoxPushing-Torque-Franka-v0`) mapped to their RON configs.
 
-use crate::env::ManagerBasedRlEnv;
 use crate::error::EnvError;
+use crate::rl_env::ManagerBasedRlEnv;
 
 /// A registered task:
 /// `inventory::submit! { TaskDef { id, description, file_name, config, overrides } }`.

@@ -5,7 +5,7 @@
 use orbit_core::config::{Node, from_node};
 use serde::de::DeserializeOwned;
 
-use crate::env::EnvView;
+use crate::base_env::EnvView;
 use crate::error::EnvError;
 use crate::scene::Scene;
 
@@ -92,7 +92,7 @@ pub trait EventTerm: Send {
         &mut self,
         scene: &mut Scene,
         env_ids: &[usize],
-        rng: &mut crate::env::EnvRngs,
+        rng: &mut crate::base_env::EnvRngs,
     ) -> Result<(), EnvError>;
 }
 
@@ -103,7 +103,7 @@ pub trait CommandTerm: Send {
     /// The commands, `num_envs × dim`.
     fn command(&self) -> &[f32];
     /// Draws new commands for the listed envs.
-    fn resample(&mut self, scene: &Scene, env_ids: &[usize], rng: &mut crate::env::EnvRngs);
+    fn resample(&mut self, scene: &Scene, env_ids: &[usize], rng: &mut crate::base_env::EnvRngs);
     /// Recomputes the metrics on the current state (called after rewards, before resets, so
     /// the values logged for a finished episode describe its terminal state).
     fn update_metrics(&mut self, _scene: &Scene) {}

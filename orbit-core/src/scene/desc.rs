@@ -117,17 +117,19 @@ pub enum SceneError {
         /// Regex error.
         message: String,
     },
-    /// A joint-name regex matches no joint.
-    #[error("{field}: `{pattern}` matches no joint of `{entity}`; its joints are {joints:?}")]
+    /// A joint- or body-name regex matches nothing.
+    #[error("{field}: `{pattern}` matches no {kind} of `{entity}`; its {kind}s are {names:?}")]
     NoMatch {
         /// Config field path.
         field: String,
         /// The pattern.
         pattern: String,
+        /// What was searched (`joint`, `body`).
+        kind: &'static str,
         /// Entity name.
         entity: String,
-        /// Available joints.
-        joints: Vec<String>,
+        /// The names available.
+        names: Vec<String>,
     },
     /// A joint is matched twice within one mapping.
     #[error("{field}: joint `{joint}` of `{entity}` is matched by more than one entry")]
@@ -177,18 +179,31 @@ pub fn match_joints(
     joints: &[String],
     patterns: &[String],
 ) -> Result<Vec<usize>, SceneError> {
+    match_names(field, entity, "joint", joints, patterns)
+}
+
+/// Resolves name patterns (full-match regexes) against `names` of a `kind` (`joint`, `body`):
+/// sorted, deduplicated indices. Every pattern must match at least one name.
+pub fn match_names(
+    field: &str,
+    entity: &str,
+    kind: &'static str,
+    names: &[String],
+    patterns: &[String],
+) -> Result<Vec<usize>, SceneError> {
     let mut selected = Vec::new();
     for pattern in patterns {
         let re = full_regex(field, pattern)?;
-        let hits: Vec<usize> = (0..joints.len())
-            .filter(|&i| re.is_match(&joints[i]))
+        let hits: Vec<usize> = (0..names.len())
+            .filter(|&i| re.is_match(&names[i]))
             .collect();
         if hits.is_empty() {
             return Err(SceneError::NoMatch {
                 field: field.to_string(),
                 pattern: pattern.clone(),
+                kind,
                 entity: entity.to_string(),
-                joints: joints.to_vec(),
+                names: names.to_vec(),
             });
         }
         selected.extend(hits);

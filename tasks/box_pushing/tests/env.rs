@@ -295,9 +295,9 @@ fn differential_ik_reaches_a_tcp_target() {
     let mut env = env(1, &[arm, scene]);
     env.reset().unwrap();
     let tcp = |env: &ManagerBasedRlEnv| {
-        let layout = &env.scene.backend.layout().articulations[0];
+        let layout = &env.scene().backend.layout().articulations[0];
         let (link, offset) = layout.model.find_frame("tcp").unwrap();
-        env.scene
+        env.scene()
             .backend
             .articulation(0)
             .frame_pose(0, link, &offset)
@@ -447,12 +447,12 @@ fn friction_randomisation_changes_sliding() {
         args.extend_from_slice(extra);
         let mut env = env(1, &args);
         env.reset().unwrap();
-        let y0 = env.scene.backend.rigid_object(0).pos[0].y;
+        let y0 = env.scene().backend.rigid_object(0).pos[0].y;
         let zero = vec![0.0; env.action_dim()];
         for _ in 0..10 {
             env.step(&zero).unwrap();
         }
-        env.scene.backend.rigid_object(0).pos[0].y - y0
+        env.scene().backend.rigid_object(0).pos[0].y - y0
     };
     let with_friction = slide(&[]);
     let without = slide(&[slippery]);
@@ -477,7 +477,7 @@ fn friction_randomisation_changes_sliding() {
 #[test]
 fn offline_ik_reproduces_fancy_gyms_initial_pose() {
     let env = env(1, &[]);
-    let desc = &env.scene.desc.articulations[0];
+    let desc = &env.scene().desc.articulations[0];
     let tcp = desc.model.find_frame("tcp").unwrap();
     let p = orbit_task_box_pushing::ArmIkParams::default();
     let mut ik = orbit_task_box_pushing::OfflineIk::new(
@@ -531,18 +531,18 @@ fn random_init_places_the_arm_above_each_box() {
     )
     .unwrap();
     env.reset().unwrap();
-    let (link, offset) = env.scene.backend.layout().articulations[0]
+    let (link, offset) = env.scene().backend.layout().articulations[0]
         .model
         .find_frame("tcp")
         .unwrap();
-    let boxes = env.scene.backend.rigid_object(0).pos.to_vec();
+    let boxes = env.scene().backend.rigid_object(0).pos.to_vec();
     for (e, b) in boxes.iter().enumerate() {
         assert!(
             (0.3 - 1e-4..=0.6 + 1e-4).contains(&b.x) && (-0.45 - 1e-4..=0.45 + 1e-4).contains(&b.y),
             "box {e} at {b:?}"
         );
         let tcp = env
-            .scene
+            .scene()
             .backend
             .articulation(0)
             .frame_pose(e, link, &offset)
@@ -551,4 +551,42 @@ fn random_init_places_the_arm_above_each_box() {
         assert!(err < 3.2e-3, "env {e}: tcp {tcp:?} vs box {b:?}");
     }
     assert_ne!(boxes[0], boxes[1], "envs draw their own box poses");
+}
+
+/// `randomize_rigid_body_mass` doubling the last arm link (link 7 with the hand and rod merged
+/// into it) changes the static bias forces (gravity torques) by the extra weight's moment
+/// about each joint axis: `Δb_j = −a_j · ((c − p_j) × Δm g)`, with `c` the link's centre of mass
+/// and `p_j`, `a_j` joint j's position and axis. An env without the event keeps the default.
+#[test]
+fn mass_randomisation_changes_gravity_torques() {
+    let event = "events.heavy_hand=(func: \"randomize_rigid_body_mass\", params: (asset: \"robot\", body_names: [\"panda_link7\"], mass_distribution_params: (2.0, 2.0), operation: Scale), mode: Startup)";
+    let bias = |env: &ManagerBasedRlEnv| env.scene().backend.articulation(0).bias_forces.to_vec();
+    let mut plain = env(1, &[]);
+    plain.reset().unwrap();
+    let mut heavy = env(1, &[event]);
+    heavy.reset().unwrap();
+    let model = &heavy.scene().desc.articulations[0].model;
+    let link = model.link_index("panda_link7").unwrap();
+    let inertial = model.links[link].inertial;
+    let view = heavy.scene().backend.articulation(0);
+    let com = view.link_pos[link] + view.link_quat[link] * inertial.com;
+    let weight = inertial.mass * glam::Vec3::new(0.0, 0.0, -9.81);
+    let (b0, b1) = (bias(&plain), bias(&heavy));
+    for (j, &dof_link) in model.dof_links().iter().enumerate() {
+        let axis = view.link_quat[dof_link] * model.links[dof_link].joint.as_ref().unwrap().axis;
+        let expected = -axis.dot((com - view.link_pos[dof_link]).cross(weight));
+        let got = b1[j] - b0[j];
+        assert!(
+            (got - expected).abs() < 1e-3 + 1e-3 * expected.abs(),
+            "joint {}: Δbias {got} vs {expected} N m",
+            j + 1
+        );
+    }
+    // The moment is not trivially zero everywhere: the hand's weight loads joints 2 and 4.
+    assert!((b1[1] - b0[1]).abs() > 0.1 && (b1[3] - b0[3]).abs() > 0.1);
+
+    // A range that could make a mass negative is refused, naming the field.
+    let bad = "events.light=(func: \"randomize_rigid_body_mass\", params: (asset: \"box\", mass_distribution_params: (-5.0, 0.0), operation: Add), mode: Reset)";
+    let err = make(TASK, &[bad.into()]).err().unwrap().to_string();
+    assert!(err.contains("events.light") && err.contains("> 0"), "{err}");
 }

@@ -1,0 +1,363 @@
+//! `ManagerBasedEnv`: a scene driven by action, observation, event and command managers, with no
+//! notion of reward or episode end (Isaac Lab `ManagerBasedEnv`, for scripted control,
+//! teleoperation or data collection). [`crate::ManagerBasedRlEnv`] builds on it.
+//!
+//! `step(action)`: process actions → `decimation` × (apply actions, physics step) → step
+//! counters += 1 → command timers → interval events → observations.
+
+use std::time::{Duration, Instant};
+
+use orbit_core::config::Node;
+use orbit_core::physics::build_backend;
+use orbit_core::rng::{EnvRng, streams};
+
+use crate::cfg::{EnvCfg, EventMode};
+use crate::error::EnvError;
+use crate::managers::*;
+use crate::scene::Scene;
+
+/// Per-env random streams of one consumer (`stream` id), keyed by `(seed, env, stream)`.
+pub struct EnvRngs {
+    rngs: Vec<EnvRng>,
+}
+
+impl EnvRngs {
+    /// Streams of `num_envs` envs.
+    pub fn new(seed: u64, num_envs: usize, stream: u32) -> Self {
+        Self {
+            rngs: (0..num_envs as u32)
+                .map(|e| EnvRng::new(seed, e, stream))
+                .collect(),
+        }
+    }
+
+    /// The stream of env `e`.
+    pub fn get(&mut self, e: usize) -> &mut EnvRng {
+        &mut self.rngs[e]
+    }
+}
+
+/// What terms read: the scene and the managers' public state.
+pub struct EnvView<'a> {
+    /// The scene (backend state and defaults).
+    pub scene: &'a Scene,
+    /// Current policy actions, `num_envs × action_dim`.
+    pub action: &'a [f32],
+    /// Previous policy actions.
+    pub prev_action: &'a [f32],
+    /// Action dimension.
+    pub action_dim: usize,
+    /// The action manager (processed actions by term).
+    pub actions: &'a ActionManager,
+    /// The command manager.
+    pub commands: &'a CommandManager,
+    /// Steps taken in each env's episode (since its last reset).
+    pub episode_length: &'a [u32],
+    /// Episode length in steps (`u32::MAX` for a base env, whose episodes do not end).
+    pub max_episode_length: u32,
+    /// Env step duration.
+    pub step_dt: f32,
+    /// Env steps since construction.
+    pub common_step_counter: u64,
+}
+
+/// The terms' view of a base env, borrowing only the fields it names (so a manager of the RL env
+/// can be borrowed mutably at the same time).
+macro_rules! view {
+    ($env:expr) => {
+        EnvView {
+            scene: &$env.scene,
+            action: &$env.actions.action,
+            prev_action: &$env.actions.prev_action,
+            action_dim: $env.actions.dim,
+            actions: &$env.actions,
+            commands: &$env.commands,
+            episode_length: &$env.episode_length,
+            max_episode_length: $env.max_episode_length,
+            step_dt: $env.step_dt,
+            common_step_counter: $env.common_step_counter,
+        }
+    };
+}
+pub(crate) use view;
+
+/// Wall-clock time spent in each phase of `step`, summed since construction or the last
+/// [`StepTimings::clear`] (for benchmarks: the managers' cost against the physics).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepTimings {
+    /// Env steps measured.
+    pub steps: u64,
+    /// Action processing and per-substep application.
+    pub actions: Duration,
+    /// Physics substeps (`backend.step`).
+    pub physics: Duration,
+    /// Termination terms.
+    pub terminations: Duration,
+    /// Reward terms.
+    pub rewards: Duration,
+    /// Resets of finished envs (curriculum, reset events, logs, command resampling).
+    pub resets: Duration,
+    /// Command timers and resampling.
+    pub commands: Duration,
+    /// Interval events.
+    pub events: Duration,
+    /// Observation terms, noise and history.
+    pub observations: Duration,
+}
+
+impl StepTimings {
+    /// Everything but the physics.
+    pub fn managers(&self) -> Duration {
+        self.actions
+            + self.terminations
+            + self.rewards
+            + self.resets
+            + self.commands
+            + self.events
+            + self.observations
+    }
+
+    /// Phases by name, in step order.
+    pub fn phases(&self) -> [(&'static str, Duration); 8] {
+        [
+            ("actions", self.actions),
+            ("physics", self.physics),
+            ("terminations", self.terminations),
+            ("rewards", self.rewards),
+            ("resets", self.resets),
+            ("commands", self.commands),
+            ("events", self.events),
+            ("observations", self.observations),
+        ]
+    }
+
+    /// Resets every sum to zero.
+    pub fn clear(&mut self) {
+        *self = Self::default();
+    }
+}
+
+/// Adds the time since `*since` to `slot` and restarts the clock.
+pub(crate) fn lap(slot: &mut Duration, since: &mut Instant) {
+    let now = Instant::now();
+    *slot += now - *since;
+    *since = now;
+}
+
+/// A manager-based environment over a batch of envs (no rewards, terminations or time-outs).
+pub struct ManagerBasedEnv {
+    /// The config it was built from.
+    pub cfg: EnvCfg,
+    /// The scene.
+    pub scene: Scene,
+    pub(crate) actions: ActionManager,
+    pub(crate) observations: ObservationManager,
+    pub(crate) events: EventManager,
+    pub(crate) commands: CommandManager,
+    pub(crate) episode_length: Vec<u32>,
+    pub(crate) max_episode_length: u32,
+    pub(crate) common_step_counter: u64,
+    pub(crate) step_dt: f32,
+    pub(crate) timings: StepTimings,
+    pub(crate) event_rngs: EnvRngs,
+    pub(crate) command_rngs: EnvRngs,
+    noise_rngs: EnvRngs,
+    interval_rngs: EnvRngs,
+}
+
+impl ManagerBasedEnv {
+    /// Builds the env from a config document (see [`EnvCfg`]).
+    pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
+        let cfg: EnvCfg = orbit_core::config::from_node(doc)?;
+        let mut env = Self::build(doc, cfg, u32::MAX)?;
+        env.apply_startup_events()?;
+        Ok(env)
+    }
+
+    /// Builds the env from RON text with overrides.
+    pub fn from_ron(text: &str, file_name: &str, overrides: &[String]) -> Result<Self, EnvError> {
+        let doc = orbit_core::config::parse_document(text, file_name, overrides)?;
+        Self::from_document(&doc)
+    }
+
+    /// Builds scene and managers in Isaac Lab's order (command, action, observation, event);
+    /// startup events are left to the caller, which may add managers first.
+    pub(crate) fn build(
+        doc: &Node,
+        cfg: EnvCfg,
+        max_episode_length: u32,
+    ) -> Result<Self, EnvError> {
+        if cfg.decimation == 0 {
+            return Err(EnvError::InvalidTerm {
+                field: "decimation".into(),
+                message: "expected at least 1 physics step per env step".into(),
+            });
+        }
+        let desc = orbit_assets::bundled_scene(&cfg.scene.bundled, &cfg.scene.overrides)?;
+        let backend = build_backend(&desc, cfg.num_envs, &cfg.sim)?;
+        let scene = Scene::new(backend, desc);
+        let n = scene.num_envs();
+        let commands = CommandManager::new(doc, &scene, &cfg)?;
+        let actions = ActionManager::new(doc, &scene, &cfg)?;
+        let observations = ObservationManager::new(doc, &scene, &cfg, &actions, &commands)?;
+        let events = EventManager::new(doc, &scene, &cfg)?;
+        let seed = cfg.seed;
+        Ok(Self {
+            scene,
+            actions,
+            observations,
+            events,
+            commands,
+            episode_length: vec![0; n],
+            max_episode_length,
+            common_step_counter: 0,
+            step_dt: cfg.sim.dt * cfg.decimation as f32,
+            timings: StepTimings::default(),
+            event_rngs: EnvRngs::new(seed, n, streams::RESET),
+            command_rngs: EnvRngs::new(seed, n, streams::COMMAND),
+            noise_rngs: EnvRngs::new(seed, n, streams::NOISE),
+            interval_rngs: EnvRngs::new(seed, n, streams::INTERVAL),
+            cfg,
+        })
+    }
+
+    /// Applies startup events to every env and draws the first interval-event times.
+    pub(crate) fn apply_startup_events(&mut self) -> Result<(), EnvError> {
+        let n = self.num_envs();
+        let all: Vec<usize> = (0..n).collect();
+        let mut startup = EnvRngs::new(self.cfg.seed, n, streams::STARTUP);
+        self.events
+            .apply(EventMode::Startup, &mut self.scene, &all, &mut startup)?;
+        self.events.init_intervals(&mut self.interval_rngs);
+        Ok(())
+    }
+
+    /// Number of envs.
+    pub fn num_envs(&self) -> usize {
+        self.scene.num_envs()
+    }
+
+    /// Total action dimension.
+    pub fn action_dim(&self) -> usize {
+        self.actions.dim()
+    }
+
+    /// Env step duration in seconds.
+    pub fn step_dt(&self) -> f32 {
+        self.step_dt
+    }
+
+    /// Steps taken in each env since its last reset.
+    pub fn episode_length(&self) -> &[u32] {
+        &self.episode_length
+    }
+
+    /// The observation group `name`: `(values num_envs × dim, dim)`.
+    pub fn observation(&self, name: &str) -> Option<(&[f32], usize)> {
+        self.observations
+            .groups
+            .iter()
+            .find(|g| g.name == name)
+            .map(|g| (g.values.as_slice(), g.dim))
+    }
+
+    /// The command manager.
+    pub fn commands(&self) -> &CommandManager {
+        &self.commands
+    }
+
+    /// The action manager.
+    pub fn actions(&self) -> &ActionManager {
+        &self.actions
+    }
+
+    /// Time spent per step phase since construction or the last `timings_mut().clear()`.
+    pub fn timings(&self) -> &StepTimings {
+        &self.timings
+    }
+
+    /// Mutable access to the phase timings (to clear them after a warm-up).
+    pub fn timings_mut(&mut self) -> &mut StepTimings {
+        &mut self.timings
+    }
+
+    /// Resets every env and computes the first observations.
+    pub fn reset(&mut self) -> Result<(), EnvError> {
+        let all: Vec<usize> = (0..self.num_envs()).collect();
+        self.reset_idx(&all)?;
+        self.compute_observations();
+        Ok(())
+    }
+
+    /// Resets the listed envs: reset events, observation histories, actions, commands (their
+    /// metrics are written to `log`) and step counters.
+    pub fn reset_idx(&mut self, env_ids: &[usize]) -> Result<(), EnvError> {
+        orbit_core::physics::check_env_ids(env_ids, self.num_envs())?;
+        self.reset_managers(env_ids, &mut Default::default())
+    }
+
+    /// The reset of the listed (already checked) envs, logging command metrics.
+    pub(crate) fn reset_managers(
+        &mut self,
+        env_ids: &[usize],
+        log: &mut std::collections::BTreeMap<String, f32>,
+    ) -> Result<(), EnvError> {
+        self.events.apply(
+            EventMode::Reset,
+            &mut self.scene,
+            env_ids,
+            &mut self.event_rngs,
+        )?;
+        self.observations.reset(env_ids);
+        self.actions.reset(env_ids);
+        self.commands
+            .reset(&self.scene, env_ids, &mut self.command_rngs, log);
+        for &e in env_ids {
+            self.episode_length[e] = 0;
+        }
+        Ok(())
+    }
+
+    /// Advances every env by one env step; read the result with [`Self::observation`].
+    pub fn step(&mut self, action: &[f32]) -> Result<(), EnvError> {
+        let mut clock = Instant::now();
+        self.simulate(action, &mut clock)?;
+        self.finish_step(&mut clock)
+    }
+
+    /// First half of a step: actions, the decimation loop, counters.
+    pub(crate) fn simulate(&mut self, action: &[f32], clock: &mut Instant) -> Result<(), EnvError> {
+        self.actions.process(&self.scene, action)?;
+        lap(&mut self.timings.actions, clock);
+        for _ in 0..self.cfg.decimation {
+            self.actions.apply(&mut self.scene)?;
+            lap(&mut self.timings.actions, clock);
+            self.scene.backend.step()?;
+            lap(&mut self.timings.physics, clock);
+        }
+        for l in &mut self.episode_length {
+            *l += 1;
+        }
+        self.common_step_counter += 1;
+        self.timings.steps += 1;
+        Ok(())
+    }
+
+    /// Last part of a step: command timers, interval events, observations.
+    pub(crate) fn finish_step(&mut self, clock: &mut Instant) -> Result<(), EnvError> {
+        self.commands
+            .compute(&self.scene, self.step_dt, &mut self.command_rngs);
+        lap(&mut self.timings.commands, clock);
+        self.events
+            .apply_interval(&mut self.scene, self.step_dt, &mut self.interval_rngs)?;
+        lap(&mut self.timings.events, clock);
+        self.compute_observations();
+        lap(&mut self.timings.observations, clock);
+        Ok(())
+    }
+
+    pub(crate) fn compute_observations(&mut self) {
+        let view = view!(self);
+        self.observations.compute(&view, &mut self.noise_rngs);
+    }
+}

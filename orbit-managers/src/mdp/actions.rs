@@ -1,0 +1,180 @@
+//! Action terms: joint position and joint effort.
+use super::*;
+
+/// Parameters of joint actions: `processed = raw · scale + offset`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointActionParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub asset: String,
+    /// Joint-name regexes.
+    #[serde(default = "all_joints")]
+    pub joint_names: Vec<String>,
+    /// Scale.
+    #[serde(default = "one")]
+    pub scale: f32,
+    /// Offset.
+    #[serde(default)]
+    pub offset: f32,
+    /// Position actions: use the default joint positions as offset.
+    #[serde(default)]
+    pub use_default_offset: bool,
+    /// Raw actions are clipped to this range first (Fancy Gym clips to `[-1, 1]`).
+    #[serde(default)]
+    pub clip: Option<(f32, f32)>,
+    /// Add the backend's bias forces (gravity + Coriolis compensation) as effort: on top of the
+    /// processed torque for effort actions (Fancy Gym's torque controller), as a feed-forward
+    /// effort beside the targets for position actions.
+    #[serde(default)]
+    pub compensate_bias: bool,
+    /// Effort actions: clip the final effort per joint (Fancy Gym's `q_torque_max`).
+    #[serde(default)]
+    pub effort_clip: Option<Vec<f32>>,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl Default for JointActionParams {
+    fn default() -> Self {
+        Self {
+            asset: robot(),
+            joint_names: all_joints(),
+            scale: 1.0,
+            offset: 0.0,
+            use_default_offset: false,
+            clip: None,
+            compensate_bias: false,
+            effort_clip: None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum JointActionKind {
+    Position,
+    Effort,
+}
+
+/// `joint_position` and `joint_effort` actions.
+struct JointAction {
+    kind: JointActionKind,
+    sel: JointSel,
+    p: JointActionParams,
+    offsets: Vec<f32>,
+    processed: Vec<f32>,
+    /// Full `num_envs × num_dofs` target/effort buffer.
+    full: Vec<f32>,
+    /// Feed-forward bias efforts of position actions.
+    feed_forward: Vec<f32>,
+}
+
+impl ActionTerm for JointAction {
+    fn dim(&self) -> usize {
+        self.sel.dofs.len()
+    }
+
+    fn process(&mut self, _scene: &Scene, raw: &[f32]) {
+        let d = self.dim();
+        for (i, (out, &a)) in self.processed.iter_mut().zip(raw).enumerate() {
+            let a = match self.p.clip {
+                Some((lo, hi)) => a.clamp(lo, hi),
+                None => a,
+            };
+            *out = a * self.p.scale + self.offsets[i % d];
+        }
+    }
+
+    fn apply(&mut self, scene: &mut Scene) -> Result<(), EnvError> {
+        let (n, d) = (self.sel.num_dofs, self.dim());
+        let view = scene.backend.articulation(self.sel.articulation);
+        for e in 0..scene.num_envs() {
+            for (k, &j) in self.sel.dofs.iter().enumerate() {
+                let mut v = self.processed[e * d + k];
+                if self.kind == JointActionKind::Effort {
+                    if self.p.compensate_bias {
+                        v += view.bias_forces[e * n + j];
+                    }
+                    if let Some(lim) = &self.p.effort_clip {
+                        v = v.clamp(-lim[k], lim[k]);
+                    }
+                }
+                self.full[e * n + j] = v;
+            }
+        }
+        match self.kind {
+            JointActionKind::Position => {
+                scene
+                    .backend
+                    .set_joint_position_targets(self.sel.articulation, &self.full)?;
+                if self.p.compensate_bias {
+                    self.sel
+                        .apply_bias_feed_forward(scene, &mut self.feed_forward)?;
+                }
+            }
+            JointActionKind::Effort => scene
+                .backend
+                .set_joint_efforts(self.sel.articulation, &self.full)?,
+        }
+        Ok(())
+    }
+
+    fn processed(&self) -> &[f32] {
+        &self.processed
+    }
+}
+
+fn joint_action(
+    ctx: &TermContext<'_>,
+    kind: JointActionKind,
+) -> Result<Box<dyn ActionTerm>, EnvError> {
+    let p: JointActionParams = ctx.params()?;
+    let sel = JointSel::resolve(
+        ctx,
+        &JointsParams {
+            asset: p.asset.clone(),
+            joint_names: p.joint_names.clone(),
+        },
+    )?;
+    let d = sel.dofs.len();
+    if let Some(lim) = &p.effort_clip
+        && lim.len() != d
+    {
+        return Err(ctx.error(format!(
+            "effort_clip has {} values for {d} joints",
+            lim.len()
+        )));
+    }
+    let defaults = &ctx.scene.desc.articulations[sel.articulation].default_joint_pos;
+    let offsets = sel
+        .dofs
+        .iter()
+        .map(|&j| {
+            if p.use_default_offset {
+                defaults[j]
+            } else {
+                p.offset
+            }
+        })
+        .collect();
+    let n = ctx.scene.num_envs();
+    // Joints outside the selection keep their default targets (position) or zero effort.
+    let full = match kind {
+        JointActionKind::Position => defaults.repeat(n),
+        JointActionKind::Effort => vec![0.0; n * sel.num_dofs],
+    };
+    Ok(Box::new(JointAction {
+        kind,
+        feed_forward: vec![0.0; full.len()],
+        full,
+        processed: vec![0.0; n * d],
+        sel,
+        p,
+        offsets,
+    }))
+}
+
+inventory::submit! { ActionTermDef { name: "joint_position", build: |c| joint_action(c, JointActionKind::Position) } }
+inventory::submit! { ActionTermDef { name: "joint_effort", build: |c| joint_action(c, JointActionKind::Effort) } }

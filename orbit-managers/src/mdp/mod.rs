@@ -1,0 +1,132 @@
+//! Built-in terms (Isaac Lab's generic `mdp` functions), registered by name: one module per
+//! kind of term, and the entity selections they share.
+
+mod actions;
+mod curriculum;
+mod events;
+mod observations;
+mod rewards;
+mod terminations;
+
+pub use actions::*;
+pub use curriculum::*;
+pub use events::*;
+pub use observations::*;
+
+use glam::{Quat, Vec3};
+use serde::Deserialize;
+
+use crate::base_env::{EnvRngs, EnvView};
+use crate::error::EnvError;
+use crate::scene::Scene;
+use crate::term::*;
+
+fn robot() -> String {
+    "robot".into()
+}
+fn all_joints() -> Vec<String> {
+    vec![".*".into()]
+}
+
+/// An articulation and a joint selection (Isaac Lab `SceneEntityCfg`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointsParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub asset: String,
+    /// Joint-name regexes (full match).
+    #[serde(default = "all_joints")]
+    pub joint_names: Vec<String>,
+}
+
+impl Default for JointsParams {
+    fn default() -> Self {
+        Self {
+            asset: robot(),
+            joint_names: all_joints(),
+        }
+    }
+}
+
+/// Resolved articulation + dof indices.
+pub struct JointSel {
+    /// Articulation index.
+    pub articulation: usize,
+    /// Selected dofs.
+    pub dofs: Vec<usize>,
+    /// Dofs of the articulation.
+    pub num_dofs: usize,
+}
+
+impl JointSel {
+    /// Per env, `Σ_k f(k, x[selected dof k])` over a `num_envs × num_dofs` array `x` (joint
+    /// positions or velocities): the shape of every joint-penalty term.
+    pub fn sum_per_env(&self, x: &[f32], out: &mut [f32], f: impl Fn(usize, f32) -> f32) {
+        let n = self.num_dofs;
+        for (e, o) in out.iter_mut().enumerate() {
+            *o = self
+                .dofs
+                .iter()
+                .enumerate()
+                .map(|(k, &j)| f(k, x[e * n + j]))
+                .sum();
+        }
+    }
+
+    /// Resolves a joint selection for a term.
+    pub fn resolve(ctx: &TermContext<'_>, p: &JointsParams) -> Result<Self, EnvError> {
+        let articulation = ctx
+            .scene
+            .articulation(&format!("{}.params.asset", ctx.field), &p.asset)?;
+        let dofs = ctx.scene.joints(
+            &format!("{}.params.joint_names", ctx.field),
+            articulation,
+            &p.joint_names,
+        )?;
+        let num_dofs = ctx.scene.backend.layout().articulations[articulation].num_dofs();
+        Ok(Self {
+            articulation,
+            dofs,
+            num_dofs,
+        })
+    }
+}
+
+impl JointSel {
+    /// Writes the backend's bias forces of the selected joints (zero elsewhere) into `buf`
+    /// (`num_envs × num_dofs`) and applies them as feed-forward efforts: gravity and Coriolis
+    /// compensation beside position targets.
+    pub fn apply_bias_feed_forward(
+        &self,
+        scene: &mut Scene,
+        buf: &mut [f32],
+    ) -> Result<(), EnvError> {
+        let n = self.num_dofs;
+        let bias = scene.backend.articulation(self.articulation).bias_forces;
+        buf.fill(0.0);
+        for e in 0..scene.num_envs() {
+            for &j in &self.dofs {
+                buf[e * n + j] = bias[e * n + j];
+            }
+        }
+        scene.backend.set_joint_efforts(self.articulation, buf)?;
+        Ok(())
+    }
+}
+
+/// Parameters naming a rigid object.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectParams {
+    /// Rigid-object name.
+    pub asset: String,
+}
+
+impl Default for ObjectParams {
+    fn default() -> Self {
+        Self {
+            asset: "object".into(),
+        }
+    }
+}

@@ -1,0 +1,196 @@
+//! Observation terms: joint state, actions, commands, object poses.
+use super::*;
+
+/// `joint_pos_rel` / `joint_vel_rel`: selected joint positions or velocities minus defaults.
+struct JointRel {
+    sel: JointSel,
+    default: Vec<f32>,
+    velocity: bool,
+}
+
+impl ObservationTerm for JointRel {
+    fn dim(&self) -> usize {
+        self.sel.dofs.len()
+    }
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let view = env.scene.backend.articulation(self.sel.articulation);
+        let src = if self.velocity {
+            view.joint_vel
+        } else {
+            view.joint_pos
+        };
+        let (n, d) = (self.sel.num_dofs, self.dim());
+        for (e, row) in out.chunks_exact_mut(d).enumerate() {
+            for (k, &j) in self.sel.dofs.iter().enumerate() {
+                row[k] = src[e * n + j] - self.default[j];
+            }
+        }
+    }
+}
+
+fn joint_rel(ctx: &TermContext<'_>, velocity: bool) -> Result<Box<dyn ObservationTerm>, EnvError> {
+    let sel = JointSel::resolve(ctx, &ctx.params()?)?;
+    let a = &ctx.scene.desc.articulations[sel.articulation];
+    let default = if velocity {
+        a.default_joint_vel.clone()
+    } else {
+        a.default_joint_pos.clone()
+    };
+    Ok(Box::new(JointRel {
+        sel,
+        default,
+        velocity,
+    }))
+}
+
+inventory::submit! { ObservationTermDef { name: "joint_pos_rel", build: |c| joint_rel(c, false) } }
+inventory::submit! { ObservationTermDef { name: "joint_vel_rel", build: |c| joint_rel(c, true) } }
+
+/// `joint_pos` / `joint_vel`: absolute joint state (a `JointRel` with zero defaults).
+fn joint_abs(ctx: &TermContext<'_>, velocity: bool) -> Result<Box<dyn ObservationTerm>, EnvError> {
+    let sel = JointSel::resolve(ctx, &ctx.params()?)?;
+    let default = vec![0.0; sel.num_dofs];
+    Ok(Box::new(JointRel {
+        sel,
+        default,
+        velocity,
+    }))
+}
+
+inventory::submit! { ObservationTermDef { name: "joint_pos", build: |c| joint_abs(c, false) } }
+inventory::submit! { ObservationTermDef { name: "joint_vel", build: |c| joint_abs(c, true) } }
+
+/// `last_action`: the policy action of the last step (zero after reset).
+struct LastAction(usize);
+
+impl ObservationTerm for LastAction {
+    fn dim(&self) -> usize {
+        self.0
+    }
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        out.copy_from_slice(env.action);
+    }
+}
+
+/// Parameters naming a command term.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CommandParams {
+    /// Command term name.
+    pub command_name: String,
+}
+
+/// `generated_commands`: the command vector of a command term.
+struct GeneratedCommands {
+    name: String,
+    dim: usize,
+}
+
+impl ObservationTerm for GeneratedCommands {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let (cmd, _) = env
+            .commands
+            .command(&self.name)
+            .expect("resolved at construction");
+        out.copy_from_slice(cmd);
+    }
+}
+/// `root_pos` / `root_quat`: a rigid object's position (env frame) or orientation `(w,x,y,z)`.
+struct RootPose {
+    object: usize,
+    quat: bool,
+}
+
+impl ObservationTerm for RootPose {
+    fn dim(&self) -> usize {
+        if self.quat { 4 } else { 3 }
+    }
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let view = env.scene.backend.rigid_object(self.object);
+        let d = self.dim();
+        for (e, row) in out.chunks_exact_mut(d).enumerate() {
+            if self.quat {
+                row.copy_from_slice(&orbit_core::math::to_wxyz(view.quat[e]));
+            } else {
+                row.copy_from_slice(&view.pos[e].to_array());
+            }
+        }
+    }
+}
+
+fn root_pose(ctx: &TermContext<'_>, quat: bool) -> Result<Box<dyn ObservationTerm>, EnvError> {
+    let p: ObjectParams = ctx.params()?;
+    let object = ctx
+        .scene
+        .rigid_object(&format!("{}.params.asset", ctx.field), &p.asset)?;
+    Ok(Box::new(RootPose { object, quat }))
+}
+
+inventory::submit! { ObservationTermDef { name: "root_pos", build: |c| root_pose(c, false) } }
+inventory::submit! { ObservationTermDef { name: "root_quat", build: |c| root_pose(c, true) } }
+
+inventory::submit! { ObservationTermDef { name: "last_action", build: |c| Ok(Box::new(LastAction(c.action_dim))) } }
+
+inventory::submit! { ObservationTermDef { name: "generated_commands", build: |c| {
+    let p: CommandParams = c.params()?;
+    let dim = c
+        .command_dims
+        .iter()
+        .find(|(n, _)| *n == p.command_name)
+        .map(|(_, d)| *d)
+        .ok_or_else(|| c.error(format!(
+            "no command term named `{}`; commands: {:?}",
+            p.command_name,
+            c.command_dims.iter().map(|(n, _)| n).collect::<Vec<_>>()
+        )))?;
+    Ok(Box::new(GeneratedCommands { name: p.command_name, dim }))
+} } }
+/// Parameters of `object_position_in_robot_root_frame`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectInRobotParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub robot: String,
+    /// Rigid-object name.
+    pub object: String,
+}
+
+impl Default for ObjectInRobotParams {
+    fn default() -> Self {
+        Self {
+            robot: robot(),
+            object: "object".into(),
+        }
+    }
+}
+
+/// `object_position_in_robot_root_frame`: the object's position in the robot's root frame.
+struct ObjectInRobot {
+    robot: usize,
+    object: usize,
+}
+
+impl ObservationTerm for ObjectInRobot {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let robot = env.scene.backend.articulation(self.robot);
+        let object = env.scene.backend.rigid_object(self.object);
+        for (e, row) in out.chunks_exact_mut(3).enumerate() {
+            let root = robot.link_pose(e, 0);
+            row.copy_from_slice(&root.inverse().transform_point(object.pos[e]).to_array());
+        }
+    }
+}
+
+inventory::submit! { ObservationTermDef { name: "object_position_in_robot_root_frame", build: |c| {
+    let p: ObjectInRobotParams = c.params()?;
+    let robot = c.scene.articulation(&format!("{}.params.robot", c.field), &p.robot)?;
+    let object = c.scene.rigid_object(&format!("{}.params.object", c.field), &p.object)?;
+    Ok(Box::new(ObjectInRobot { robot, object }))
+} } }

@@ -1,0 +1,143 @@
+//! Reward terms: action rate, joint speed, joint limits.
+use super::*;
+
+/// `action_rate_l2`: `Σ (a − a_prev)²`.
+struct ActionRate;
+
+impl RewardTerm for ActionRate {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let d = env.action_dim;
+        for (e, o) in out.iter_mut().enumerate() {
+            *o = (0..d)
+                .map(|i| (env.action[e * d + i] - env.prev_action[e * d + i]).powi(2))
+                .sum();
+        }
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "action_rate_l2", build: |_| Ok(Box::new(ActionRate)) } }
+
+/// `joint_vel_l2`: `Σ q̇²` over selected joints.
+struct JointVelL2(JointSel);
+
+impl RewardTerm for JointVelL2 {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let v = env
+            .scene
+            .backend
+            .articulation(self.0.articulation)
+            .joint_vel;
+        self.0.sum_per_env(v, out, |_, qd| qd * qd);
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "joint_vel_l2", build: |c| Ok(Box::new(JointVelL2(JointSel::resolve(c, &c.params()?)?))) } }
+
+/// `joint_pos_limits`: `Σ max(q_min − q, 0) + max(q − q_max, 0)` over the selected joints, with
+/// the model's position limits (unlimited joints contribute nothing).
+struct JointPosLimits {
+    sel: JointSel,
+    /// `(lower, upper)` per selected joint.
+    limits: Vec<(f32, f32)>,
+}
+
+impl RewardTerm for JointPosLimits {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let q = env
+            .scene
+            .backend
+            .articulation(self.sel.articulation)
+            .joint_pos;
+        let limits = &self.limits;
+        self.sel.sum_per_env(q, out, |k, q| {
+            (limits[k].0 - q).max(0.0) + (q - limits[k].1).max(0.0)
+        });
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "joint_pos_limits", build: |c| {
+    let sel = JointSel::resolve(c, &c.params()?)?;
+    let model = &c.scene.desc.articulations[sel.articulation].model;
+    let dof_links = model.dof_links();
+    let limits = sel
+        .dofs
+        .iter()
+        .map(|&j| {
+            let joint = model.links[dof_links[j]].joint.as_ref();
+            match joint.and_then(|j| j.limits) {
+                Some([lo, hi]) => (lo, hi),
+                None => (f32::NEG_INFINITY, f32::INFINITY),
+            }
+        })
+        .collect();
+    Ok(Box::new(JointPosLimits { sel, limits }))
+} } }
+
+/// Parameters of `joint_vel_limits`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointVelLimitsParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub asset: String,
+    /// Joint-name regexes (full match).
+    #[serde(default = "all_joints")]
+    pub joint_names: Vec<String>,
+    /// Fraction of each joint's velocity limit beyond which the penalty starts.
+    pub soft_ratio: f32,
+}
+
+impl Default for JointVelLimitsParams {
+    fn default() -> Self {
+        Self {
+            asset: robot(),
+            joint_names: all_joints(),
+            soft_ratio: 1.0,
+        }
+    }
+}
+
+/// `joint_vel_limits`: `Σ clamp(|q̇| − soft_ratio · q̇_max, 0, 1)` over the selected joints (Isaac
+/// Lab's term, whose clamp bounds each joint's share). `q̇_max` is the asset's joint velocity
+/// limit, else the actuator's.
+struct JointVelLimits {
+    sel: JointSel,
+    /// `soft_ratio · q̇_max` per selected joint.
+    soft_limits: Vec<f32>,
+}
+
+impl RewardTerm for JointVelLimits {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let v = env
+            .scene
+            .backend
+            .articulation(self.sel.articulation)
+            .joint_vel;
+        let limits = &self.soft_limits;
+        self.sel
+            .sum_per_env(v, out, |k, qd| (qd.abs() - limits[k]).clamp(0.0, 1.0));
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "joint_vel_limits", build: |c| {
+    let p: JointVelLimitsParams = c.params()?;
+    if !(p.soft_ratio.is_finite() && p.soft_ratio > 0.0) {
+        return Err(c.error(format!("params.soft_ratio must be positive, got {}", p.soft_ratio)));
+    }
+    let sel = JointSel::resolve(c, &JointsParams { asset: p.asset, joint_names: p.joint_names })?;
+    let desc = &c.scene.desc.articulations[sel.articulation];
+    let dof_links = desc.model.dof_links();
+    let mut soft_limits = Vec::with_capacity(sel.dofs.len());
+    for &j in &sel.dofs {
+        let joint = desc.model.links[dof_links[j]].joint.as_ref().expect("dof link has a joint");
+        let limit = joint.velocity_limit.unwrap_or(desc.drives[j].velocity_limit);
+        if !limit.is_finite() {
+            return Err(c.error(format!(
+                "joint `{}` has no velocity limit (neither in the asset nor in its actuator's `velocity_limit`)",
+                joint.name
+            )));
+        }
+        soft_limits.push(p.soft_ratio * limit);
+    }
+    Ok(Box::new(JointVelLimits { sel, soft_limits }))
+} } }

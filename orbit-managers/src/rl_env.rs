@@ -1,0 +1,237 @@
+//! `ManagerBasedRlEnv`: Isaac Lab's construction, step and reset order over a
+//! [`ManagerBasedEnv`], kept as a tested contract (see `tests/step_order.rs`).
+//!
+//! `step(action)`: process actions → `decimation` × (apply actions, physics step) → episode
+//! counters += 1 → terminations → rewards (× `step_dt`, on the terminal state) → command
+//! metrics on the terminal state → reset of finished envs (curriculum, reset events, logs,
+//! command resampling) → command timers → interval events → observations (a reset env's
+//! observation belongs to its new episode).
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use orbit_core::config::Node;
+
+use crate::base_env::{EnvView, ManagerBasedEnv, StepTimings, lap, view};
+use crate::cfg::RlEnvCfg;
+use crate::error::EnvError;
+use crate::managers::*;
+use crate::scene::Scene;
+
+/// Extra information of the last step.
+#[derive(Clone, Debug, Default)]
+pub struct Extras {
+    /// Per-term episode statistics of the envs reset in the last step (Isaac Lab's
+    /// `extras["log"]`): `Episode Reward/<term>` (mean episodic sum / episode seconds),
+    /// `Episode Termination/<term>` (count), `Metrics/<command>/<metric>`, `Curriculum/<term>`.
+    pub log: BTreeMap<String, f32>,
+}
+
+/// A manager-based RL environment over a batch of envs.
+pub struct ManagerBasedRlEnv {
+    /// The config it was built from.
+    pub cfg: RlEnvCfg,
+    base: ManagerBasedEnv,
+    rewards: RewardManager,
+    terminations: TerminationManager,
+    curriculum: CurriculumManager,
+    reward: Vec<f32>,
+    terminated: Vec<bool>,
+    time_outs: Vec<bool>,
+    reset_ids: Vec<usize>,
+    extras: Extras,
+}
+
+/// The result of a step: views into the env's buffers.
+pub struct StepResult<'a> {
+    /// Rewards, one per env.
+    pub reward: &'a [f32],
+    /// Terminated (not time-out), one per env.
+    pub terminated: &'a [bool],
+    /// Truncated by a time-out, one per env.
+    pub time_outs: &'a [bool],
+    /// Extras.
+    pub extras: &'a Extras,
+}
+
+impl ManagerBasedRlEnv {
+    /// Builds the env from a config document (see [`RlEnvCfg`]).
+    pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
+        let cfg: RlEnvCfg = orbit_core::config::from_node(doc)?;
+        if !(cfg.episode_length_s.is_finite() && cfg.episode_length_s > 0.0) {
+            return Err(EnvError::InvalidTerm {
+                field: "episode_length_s".into(),
+                message: format!("expected a positive duration, got {}", cfg.episode_length_s),
+            });
+        }
+        let step_dt = cfg.sim.dt * cfg.decimation as f32;
+        let max_episode_length = (cfg.episode_length_s / step_dt - 1e-4).ceil() as u32;
+        // Isaac Lab's order: command, action, observation, event (the base env), then
+        // termination, reward, curriculum; startup events once every manager exists.
+        let base = ManagerBasedEnv::build(doc, cfg.base(), max_episode_length)?;
+        let (scene, actions, commands) = (&base.scene, &base.actions, &base.commands);
+        let terminations =
+            TerminationManager::new(doc, scene, &base.cfg, &cfg.terminations, actions, commands)?;
+        let rewards = RewardManager::new(doc, scene, &base.cfg, &cfg.rewards, actions, commands)?;
+        let curriculum = CurriculumManager::new(doc, scene, &base.cfg, &cfg.curriculum)?;
+        let n = base.num_envs();
+        let mut env = Self {
+            cfg,
+            base,
+            rewards,
+            terminations,
+            curriculum,
+            reward: vec![0.0; n],
+            terminated: vec![false; n],
+            time_outs: vec![false; n],
+            reset_ids: Vec::with_capacity(n),
+            extras: Extras::default(),
+        };
+        env.base.apply_startup_events()?;
+        Ok(env)
+    }
+
+    /// Builds the env from RON text (e.g. a bundled task config) with overrides.
+    pub fn from_ron(text: &str, file_name: &str, overrides: &[String]) -> Result<Self, EnvError> {
+        let doc = orbit_core::config::parse_document(text, file_name, overrides)?;
+        Self::from_document(&doc)
+    }
+
+    /// The base env (scene, actions, observations, events, commands).
+    pub fn base(&self) -> &ManagerBasedEnv {
+        &self.base
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.base.scene
+    }
+
+    /// The scene, mutably (for scripted state changes between steps).
+    pub fn scene_mut(&mut self) -> &mut Scene {
+        &mut self.base.scene
+    }
+
+    /// Number of envs.
+    pub fn num_envs(&self) -> usize {
+        self.base.num_envs()
+    }
+
+    /// Total action dimension.
+    pub fn action_dim(&self) -> usize {
+        self.base.action_dim()
+    }
+
+    /// Episode length in env steps.
+    pub fn max_episode_length(&self) -> u32 {
+        self.base.max_episode_length
+    }
+
+    /// Env step duration in seconds.
+    pub fn step_dt(&self) -> f32 {
+        self.base.step_dt
+    }
+
+    /// Steps taken in each env's current episode.
+    pub fn episode_length(&self) -> &[u32] {
+        &self.base.episode_length
+    }
+
+    /// The observation group `name`: `(values num_envs × dim, dim)`.
+    pub fn observation(&self, name: &str) -> Option<(&[f32], usize)> {
+        self.base.observation(name)
+    }
+
+    /// The command manager.
+    pub fn commands(&self) -> &CommandManager {
+        &self.base.commands
+    }
+
+    /// The action manager.
+    pub fn actions(&self) -> &ActionManager {
+        &self.base.actions
+    }
+
+    /// Time spent per step phase since construction or the last `timings_mut().clear()`.
+    pub fn timings(&self) -> &StepTimings {
+        &self.base.timings
+    }
+
+    /// Mutable access to the phase timings (to clear them after a warm-up).
+    pub fn timings_mut(&mut self) -> &mut StepTimings {
+        &mut self.base.timings
+    }
+
+    /// Every reward term's unweighted per-env value on the current state (without `step_dt`),
+    /// in config order: for inspecting a reward and testing terms on prepared states.
+    pub fn evaluate_reward_terms(&mut self) -> Vec<(String, Vec<f32>)> {
+        let base = &self.base;
+        let view = view!(base);
+        self.rewards.evaluate_terms(&view)
+    }
+
+    /// Resets every env and computes the first observations.
+    pub fn reset(&mut self) -> Result<(), EnvError> {
+        let all: Vec<usize> = (0..self.num_envs()).collect();
+        self.reset_idx(&all)?;
+        self.base.compute_observations();
+        Ok(())
+    }
+
+    /// Resets the listed envs (Isaac Lab `_reset_idx`): curriculum, reset events, observation
+    /// histories, logs (rewards, commands, terminations), episode counters.
+    pub fn reset_idx(&mut self, env_ids: &[usize]) -> Result<(), EnvError> {
+        orbit_core::physics::check_env_ids(env_ids, self.num_envs())?;
+        let mut log = BTreeMap::new();
+        self.curriculum.compute(
+            env_ids,
+            self.base.common_step_counter,
+            &mut self.rewards,
+            &mut log,
+        )?;
+        self.base.reset_managers(env_ids, &mut log)?;
+        self.rewards
+            .reset(env_ids, self.cfg.episode_length_s, &mut log);
+        self.terminations.reset(env_ids, &mut log);
+        self.extras.log = log;
+        Ok(())
+    }
+
+    /// Advances every env by one env step (see the module docs for the order).
+    pub fn step(&mut self, action: &[f32]) -> Result<StepResult<'_>, EnvError> {
+        let mut clock = Instant::now();
+        self.base.simulate(action, &mut clock)?;
+        {
+            let base = &self.base;
+            let view = view!(base);
+            self.terminations
+                .compute(&view, &mut self.terminated, &mut self.time_outs);
+            lap(&mut self.base.timings.terminations, &mut clock);
+        }
+        {
+            let base = &self.base;
+            let view = view!(base);
+            self.rewards.compute(&view, base.step_dt, &mut self.reward);
+        }
+        lap(&mut self.base.timings.rewards, &mut clock);
+        self.base.commands.update_metrics(&self.base.scene);
+        let (terminated, time_outs) = (&self.terminated, &self.time_outs);
+        self.reset_ids.clear();
+        self.reset_ids
+            .extend((0..terminated.len()).filter(|&e| terminated[e] || time_outs[e]));
+        if !self.reset_ids.is_empty() {
+            let ids = std::mem::take(&mut self.reset_ids);
+            let result = self.reset_idx(&ids);
+            self.reset_ids = ids;
+            result?;
+        }
+        lap(&mut self.base.timings.resets, &mut clock);
+        self.base.finish_step(&mut clock)?;
+        Ok(StepResult {
+            reward: &self.reward,
+            terminated: &self.terminated,
+            time_outs: &self.time_outs,
+            extras: &self.extras,
+        })
+    }
+}
