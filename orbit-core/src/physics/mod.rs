@@ -215,8 +215,10 @@ pub trait PhysicsBackend: Send {
     /// Sets the drives' velocity targets, `num_envs × num_dofs`.
     fn set_joint_velocity_targets(&mut self, a: usize, targets: &[f32])
     -> Result<(), PhysicsError>;
-    /// Sets feed-forward joint efforts held until changed, `num_envs × num_dofs`; the sum with
-    /// the drive effort is clipped to each joint's effort limit.
+    /// Sets feed-forward joint efforts held until changed, `num_envs × num_dofs`. The sum with
+    /// the drive effort, evaluated on the state at the start of a step, is kept within each
+    /// joint's effort limit (an implicit drive's effort at the end of the step can differ by its
+    /// implicit correction).
     fn set_joint_efforts(&mut self, a: usize, efforts: &[f32]) -> Result<(), PhysicsError>;
     /// Overwrites joint positions and velocities of the listed envs (`env_ids.len() × num_dofs`
     /// each) and zeroes their targets' effect history.
