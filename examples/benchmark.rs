@@ -6,8 +6,9 @@
 //! ```
 //!
 //! The arm runs Fancy Gym's torque law with a sinusoidal normalised action per joint
-//! (`τ = clip(10 a + bias, ±τ_max)`), so the multibody, the box–table contacts and the bias
-//! forces are all exercised every step. The full-env column steps the registered task with
+//! (`τ = clip(10 a + bias, ±τ_max)`, the backend adding the bias forces and clamping at the
+//! effort limits every substep), so the multibody, the box–table contacts and the bias forces
+//! are all exercised every step; the substeps of an env step are one `step_n` call. The full-env column steps the registered task with
 //! the same kind of actions; its `managers / physics` ratio and the per-phase table come from the
 //! env's own step timings.
 
@@ -108,7 +109,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for &n in &args.num_envs {
         let mut backend = build_backend(&scene, n, &sim)?;
         let dofs = backend.layout().articulations[0].num_dofs();
-        let limits = [87.0f32, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0];
+        // Fancy Gym's law with the backend adding the bias forces every substep.
+        backend.set_bias_compensation(0, &(0..dofs).collect::<Vec<_>>(), true)?;
         let mut efforts = vec![0.0f32; n * dofs];
         let mut run = |backend: &mut Box<dyn orbit::core::physics::PhysicsBackend>,
                        steps: usize,
@@ -116,17 +118,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
          -> Result<(), Box<dyn std::error::Error>> {
             for k in t0..t0 + steps {
                 let t = k as f32 * 0.02;
-                let bias = backend.articulation(0).bias_forces;
                 for (i, tau) in efforts.iter_mut().enumerate() {
-                    let d = i % dofs;
-                    let a = 0.3 * (2.0 * std::f32::consts::PI * 0.5 * t + d as f32).sin();
-                    let lim = limits.get(d).copied().unwrap_or(87.0);
-                    *tau = (10.0 * a + bias[i]).clamp(-lim, lim);
+                    let a = 0.3 * (2.0 * std::f32::consts::PI * 0.5 * t + (i % dofs) as f32).sin();
+                    *tau = 10.0 * a;
                 }
                 backend.set_joint_efforts(0, &efforts)?;
-                for _ in 0..args.decimation {
-                    backend.step()?;
-                }
+                backend.step_n(args.decimation)?;
             }
             Ok(())
         };
@@ -135,13 +132,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         run(&mut backend, args.steps, 20)?;
         let secs = start.elapsed().as_secs_f64();
         let rate = (n * args.steps) as f64 / secs;
+        let memory = backend.device_memory_bytes() as f64 / n as f64;
+        drop(backend);
         let (env_secs, timings) = full_env_seconds(&args, n)?;
         let env_rate = (n * args.steps) as f64 / env_secs;
         let overhead = timings.managers().as_secs_f64() / timings.physics.as_secs_f64();
         println!(
-            "| {n:>4} | {rate:>19.0} | {:>10.0} | {env_rate:>20.0} | {:>16.1} % |",
+            "| {n:>4} | {rate:>19.0} | {:>10.0} | {env_rate:>20.0} | {:>16.1} % | {:>19.0} B |",
             rate / threads as f64,
-            overhead * 100.0
+            overhead * 100.0,
+            memory
         );
         phases.push((n, timings));
     }

@@ -8,6 +8,7 @@ pub use orbit_assets as assets;
 pub use orbit_core as core;
 pub use orbit_managers as managers;
 pub use orbit_physics_rapier as physics_rapier;
+pub use orbit_physics_wgpu as physics_wgpu;
 pub use orbit_task_box_pushing as task_box_pushing;
 
 /// Builds a registered task (`BoxPushing-Torque-Franka-v0`, …) with config overrides; linking
@@ -19,6 +20,7 @@ pub fn make(
     // Reference the backend and task crates so their registrations are linked in.
     let _ = (
         physics_rapier::BACKEND_NAME,
+        physics_wgpu::BACKEND_NAME,
         task_box_pushing::SUCCESS_DISTANCE,
     );
     managers::make(task, overrides)

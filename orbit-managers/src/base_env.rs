@@ -325,15 +325,24 @@ impl ManagerBasedEnv {
         self.finish_step(&mut clock)
     }
 
-    /// First half of a step: actions, the decimation loop, counters.
+    /// First half of a step: actions, the decimation loop (one fused call when the actions
+    /// allow it), counters.
     pub(crate) fn simulate(&mut self, action: &[f32], clock: &mut Instant) -> Result<(), EnvError> {
         self.actions.process(&self.scene, action)?;
         lap(&mut self.timings.actions, clock);
-        for _ in 0..self.cfg.decimation {
+        if self.actions.substep_invariant() {
+            // Inputs fixed for the whole env step: one call, which a GPU backend fuses.
             self.actions.apply(&mut self.scene)?;
             lap(&mut self.timings.actions, clock);
-            self.scene.backend.step()?;
+            self.scene.backend.step_n(self.cfg.decimation)?;
             lap(&mut self.timings.physics, clock);
+        } else {
+            for _ in 0..self.cfg.decimation {
+                self.actions.apply(&mut self.scene)?;
+                lap(&mut self.timings.actions, clock);
+                self.scene.backend.step()?;
+                lap(&mut self.timings.physics, clock);
+            }
         }
         for l in &mut self.episode_length {
             *l += 1;

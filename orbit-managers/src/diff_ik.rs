@@ -155,7 +155,8 @@ struct DiffIkAction {
     /// Desired pose per env (env frame), set once per env step.
     desired: Vec<Pose>,
     targets: Vec<f32>,
-    feed_forward: Vec<f32>,
+    /// Bias compensation has been handed to the backend (on the first `apply`).
+    compensation_enabled: bool,
     jac: Vec<(Vec3, Vec3)>,
     q: Vec<f32>,
 }
@@ -269,9 +270,9 @@ impl ActionTerm for DiffIkAction {
         scene
             .backend
             .set_joint_position_targets(art, &self.targets)?;
-        if self.p.compensate_bias {
-            self.sel
-                .apply_bias_feed_forward(scene, &mut self.feed_forward)?;
+        if self.p.compensate_bias && !self.compensation_enabled {
+            self.sel.enable_bias_compensation(scene)?;
+            self.compensation_enabled = true;
         }
         Ok(())
     }
@@ -306,7 +307,7 @@ fn build(ctx: &TermContext<'_>) -> Result<Box<dyn ActionTerm>, EnvError> {
         processed: vec![0.0; n * d],
         desired: vec![Pose::IDENTITY; n],
         targets: desc.default_joint_pos.repeat(n),
-        feed_forward: vec![0.0; n * dofs],
+        compensation_enabled: false,
         jac: vec![(Vec3::ZERO, Vec3::ZERO); dofs],
         q: vec![0.0; dofs],
         sel,

@@ -129,6 +129,12 @@ impl ActionManager {
         Ok(())
     }
 
+    /// Whether every term's inputs stay fixed within an env step (see
+    /// [`ActionTerm::substep_invariant`]).
+    pub(crate) fn substep_invariant(&self) -> bool {
+        self.terms.iter().all(|(_, t)| t.substep_invariant())
+    }
+
     pub(crate) fn reset(&mut self, env_ids: &[usize]) {
         for &e in env_ids {
             self.action[e * self.dim..(e + 1) * self.dim].fill(0.0);

@@ -79,6 +79,12 @@ pub trait ActionTerm: Send {
     fn process(&mut self, scene: &Scene, raw: &[f32]);
     /// Writes targets/efforts to the backend, before every physics step.
     fn apply(&mut self, scene: &mut Scene) -> Result<(), EnvError>;
+    /// Whether `apply` writes the same inputs before every physics step of an env step (it
+    /// reads no simulation state), so the env may apply once and let the backend run the
+    /// `decimation` steps together (`PhysicsBackend::step_n`).
+    fn substep_invariant(&self) -> bool {
+        false
+    }
     /// Clears per-env state of the listed envs.
     fn reset(&mut self, _env_ids: &[usize]) {}
     /// Processed actions, `num_envs × dim` (e.g. the commanded torques).

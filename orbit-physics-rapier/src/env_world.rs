@@ -361,9 +361,10 @@ impl EnvWorld {
             out.q[d] = link.joint().coords()[art.dof_axis[d]];
             out.qd[d] = vel[link.assembly_id()];
             let dr = &drives[d];
+            // `out.bias` still holds the step's starting state (recomputed below).
             let tau = dr.stiffness * (input.pos_target[d] - out.q[d])
                 + dr.damping * (input.vel_target[d] - out.qd[d])
-                + input.effort[d];
+                + input.effort(d, &out.bias);
             out.applied[d] = tau.clamp(-dr.effort_limit, dr.effort_limit);
         }
         art.kin
@@ -474,7 +475,7 @@ impl EnvWorld {
                 .link(art.dof_mb_link[d])
                 .expect("link exists")
                 .assembly_id();
-            let mut effort = input.effort[d];
+            let mut effort = input.effort(d, &art.out.bias);
             let (mut k, mut q_rest, mut damping) = (0.0, 0.0, art.joint_damping[d]);
             if drive.stiffness > 0.0 || drive.damping > 0.0 {
                 let q = mb
@@ -591,4 +592,13 @@ pub(crate) struct ArticulationInputs<'a> {
     pub pos_target: &'a [f32],
     pub vel_target: &'a [f32],
     pub effort: &'a [f32],
+    /// Dofs whose effort input gets the bias forces of the step's starting state added.
+    pub compensate: &'a [bool],
+}
+
+impl ArticulationInputs<'_> {
+    /// The effort input of dof `d`, with the bias compensation if enabled.
+    fn effort(&self, d: usize, bias: &[f32]) -> f32 {
+        self.effort[d] + if self.compensate[d] { bias[d] } else { 0.0 }
+    }
 }

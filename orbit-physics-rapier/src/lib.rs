@@ -45,6 +45,8 @@ struct ArticulationBuffers {
     pos_target: Vec<f32>,
     vel_target: Vec<f32>,
     effort: Vec<f32>,
+    /// Per dof: add the bias forces to the effort input every step.
+    compensate: Vec<bool>,
     joint_pos: Vec<f32>,
     joint_vel: Vec<f32>,
     bias: Vec<f32>,
@@ -113,6 +115,7 @@ impl RapierBackend {
                     pos_target: tile(&a.default_joint_pos),
                     vel_target: vec![0.0; num_envs * dofs],
                     effort: vec![0.0; num_envs * dofs],
+                    compensate: vec![false; dofs],
                     joint_pos: vec![0.0; num_envs * dofs],
                     joint_vel: vec![0.0; num_envs * dofs],
                     bias: vec![0.0; num_envs * dofs],
@@ -159,6 +162,7 @@ impl RapierBackend {
                 pos_target: &b.pos_target[r.clone()],
                 vel_target: &b.vel_target[r.clone()],
                 effort: &b.effort[r],
+                compensate: &b.compensate,
             }
         })
     }
@@ -345,6 +349,24 @@ impl PhysicsBackend for RapierBackend {
 
     fn set_joint_efforts(&mut self, a: usize, efforts: &[f32]) -> Result<(), PhysicsError> {
         self.set_inputs(a, "joint efforts", efforts, |b| &mut b.effort)
+    }
+
+    fn set_bias_compensation(
+        &mut self,
+        a: usize,
+        dofs: &[usize],
+        enabled: bool,
+    ) -> Result<(), PhysicsError> {
+        let n = self.check_articulation(a)?.dofs;
+        if let Some(d) = dofs.iter().find(|&&d| d >= n) {
+            return Err(PhysicsError::InvalidInput(format!(
+                "bias compensation: dof {d} out of range ({n} dofs)"
+            )));
+        }
+        for &d in dofs {
+            self.arts[a].compensate[d] = enabled;
+        }
+        Ok(())
     }
 
     fn write_joint_state(

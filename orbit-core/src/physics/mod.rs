@@ -204,6 +204,21 @@ pub trait PhysicsBackend: Send {
     /// Advances every env by one time step.
     fn step(&mut self) -> Result<(), PhysicsError>;
 
+    /// Bytes of accelerator memory the backend holds for its buffers (0 for CPU backends).
+    fn device_memory_bytes(&self) -> usize {
+        0
+    }
+
+    /// Advances every env by `n` time steps with the current inputs: an env step's decimation
+    /// loop when no input changes in between (a GPU backend runs them in one dispatch, with one
+    /// readback).
+    fn step_n(&mut self, n: usize) -> Result<(), PhysicsError> {
+        for _ in 0..n {
+            self.step()?;
+        }
+        Ok(())
+    }
+
     /// Batched state of articulation `a`.
     fn articulation(&self, a: usize) -> ArticulationView<'_>;
     /// Batched state of rigid object `o`.
@@ -220,6 +235,16 @@ pub trait PhysicsBackend: Send {
     /// joint's effort limit (an implicit drive's effort at the end of the step can differ by its
     /// implicit correction).
     fn set_joint_efforts(&mut self, a: usize, efforts: &[f32]) -> Result<(), PhysicsError>;
+    /// For the listed dofs of articulation `a` (all envs): whether every time step adds the bias
+    /// forces of its starting state to the effort input, before the effort limit (gravity and
+    /// Coriolis compensation as Fancy Gym's torque controller does, without a round trip
+    /// through the caller between steps). Other dofs keep their setting (initially off).
+    fn set_bias_compensation(
+        &mut self,
+        a: usize,
+        dofs: &[usize],
+        enabled: bool,
+    ) -> Result<(), PhysicsError>;
     /// Overwrites joint positions and velocities of the listed envs (`env_ids.len() × num_dofs`
     /// each) and zeroes their targets' effect history.
     fn write_joint_state(

@@ -67,8 +67,10 @@ struct JointAction {
     processed: Vec<f32>,
     /// Full `num_envs × num_dofs` target/effort buffer.
     full: Vec<f32>,
-    /// Feed-forward bias efforts of position actions.
-    feed_forward: Vec<f32>,
+    /// The backend adds the bias forces (set up on the first `apply`); otherwise an effort
+    /// action adds them itself before clipping, every physics step.
+    backend_compensation: bool,
+    compensation_enabled: bool,
 }
 
 impl ActionTerm for JointAction {
@@ -88,13 +90,18 @@ impl ActionTerm for JointAction {
     }
 
     fn apply(&mut self, scene: &mut Scene) -> Result<(), EnvError> {
+        if self.backend_compensation && !self.compensation_enabled {
+            self.sel.enable_bias_compensation(scene)?;
+            self.compensation_enabled = true;
+        }
         let (n, d) = (self.sel.num_dofs, self.dim());
         let view = scene.backend.articulation(self.sel.articulation);
+        let own_bias = self.p.compensate_bias && !self.backend_compensation;
         for e in 0..scene.num_envs() {
             for (k, &j) in self.sel.dofs.iter().enumerate() {
                 let mut v = self.processed[e * d + k];
-                if self.kind == JointActionKind::Effort {
-                    if self.p.compensate_bias {
+                if self.kind == JointActionKind::Effort && !self.backend_compensation {
+                    if own_bias {
                         v += view.bias_forces[e * n + j];
                     }
                     if let Some(lim) = &self.p.effort_clip {
@@ -104,21 +111,17 @@ impl ActionTerm for JointAction {
                 self.full[e * n + j] = v;
             }
         }
+        let a = self.sel.articulation;
         match self.kind {
-            JointActionKind::Position => {
-                scene
-                    .backend
-                    .set_joint_position_targets(self.sel.articulation, &self.full)?;
-                if self.p.compensate_bias {
-                    self.sel
-                        .apply_bias_feed_forward(scene, &mut self.feed_forward)?;
-                }
-            }
-            JointActionKind::Effort => scene
-                .backend
-                .set_joint_efforts(self.sel.articulation, &self.full)?,
+            JointActionKind::Position => scene.backend.set_joint_position_targets(a, &self.full)?,
+            JointActionKind::Effort => scene.backend.set_joint_efforts(a, &self.full)?,
         }
         Ok(())
+    }
+
+    fn substep_invariant(&self) -> bool {
+        // Only an effort action adding the bias forces itself reads state between steps.
+        !self.p.compensate_bias || self.backend_compensation
     }
 
     fn processed(&self) -> &[f32] {
@@ -165,9 +168,22 @@ fn joint_action(
         JointActionKind::Position => defaults.repeat(n),
         JointActionKind::Effort => vec![0.0; n * sel.num_dofs],
     };
+    // The backend's compensation adds the bias before the drive's effort limit. An effort
+    // clip at or above that limit changes nothing on top, so the backend can do it; a tighter
+    // clip must see the bias, so this term adds it every physics step.
+    let drives = &ctx.scene.desc.articulations[sel.articulation].drives;
+    let backend_compensation = p.compensate_bias
+        && (kind == JointActionKind::Position
+            || p.effort_clip.as_ref().is_none_or(|lim| {
+                sel.dofs
+                    .iter()
+                    .zip(lim)
+                    .all(|(&j, &l)| l >= drives[j].effort_limit)
+            }));
     Ok(Box::new(JointAction {
         kind,
-        feed_forward: vec![0.0; full.len()],
+        backend_compensation,
+        compensation_enabled: false,
         full,
         processed: vec![0.0; n * d],
         sel,

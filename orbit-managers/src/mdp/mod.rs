@@ -94,23 +94,12 @@ impl JointSel {
 }
 
 impl JointSel {
-    /// Writes the backend's bias forces of the selected joints (zero elsewhere) into `buf`
-    /// (`num_envs × num_dofs`) and applies them as feed-forward efforts: gravity and Coriolis
-    /// compensation beside position targets.
-    pub fn apply_bias_feed_forward(
-        &self,
-        scene: &mut Scene,
-        buf: &mut [f32],
-    ) -> Result<(), EnvError> {
-        let n = self.num_dofs;
-        let bias = scene.backend.articulation(self.articulation).bias_forces;
-        buf.fill(0.0);
-        for e in 0..scene.num_envs() {
-            for &j in &self.dofs {
-                buf[e * n + j] = bias[e * n + j];
-            }
-        }
-        scene.backend.set_joint_efforts(self.articulation, buf)?;
+    /// Makes the backend add its bias forces to the selected joints' effort input at every
+    /// physics step (gravity and Coriolis compensation beside targets or efforts).
+    pub fn enable_bias_compensation(&self, scene: &mut Scene) -> Result<(), EnvError> {
+        scene
+            .backend
+            .set_bias_compensation(self.articulation, &self.dofs, true)?;
         Ok(())
     }
 }

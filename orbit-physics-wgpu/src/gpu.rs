@@ -1,0 +1,98 @@
+//! The GPU: one Vulkan device shared by every backend of the process (wgpu with
+//! `Backends::VULKAN` only, so a missing driver is reported instead of silently falling back to
+//! a GL adapter).
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// A wgpu device and its queue.
+pub struct Gpu {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// What the adapter is (name, driver, device type).
+    pub info: wgpu::AdapterInfo,
+    /// The device's limits (the adapter's, all requested).
+    pub limits: wgpu::Limits,
+    /// Compiled kernels by WGSL source: backends of the same scene share one (compiling is
+    /// slow, seconds on a CPU Vulkan driver).
+    pipelines: Mutex<HashMap<String, wgpu::ComputePipeline>>,
+}
+
+impl Gpu {
+    /// The compute pipeline of a WGSL source with entry point `main`, compiled once.
+    pub fn pipeline(&self, source: &str) -> wgpu::ComputePipeline {
+        let mut cache = self.pipelines.lock().expect("pipeline cache lock");
+        if let Some(p) = cache.get(source) {
+            return p.clone();
+        }
+        let module = self
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("orbit step"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("orbit step"),
+                layout: None,
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        cache.insert(source.to_string(), pipeline.clone());
+        pipeline
+    }
+}
+
+static GPU: OnceLock<Result<Arc<Gpu>, String>> = OnceLock::new();
+
+/// The process's GPU, created on first use; an error says why none is available.
+pub fn gpu() -> Result<Arc<Gpu>, String> {
+    GPU.get_or_init(|| pollster::block_on(create()).map(Arc::new))
+        .clone()
+}
+
+async fn create() -> Result<Gpu, String> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::VULKAN;
+    let instance = wgpu::Instance::new(desc);
+    let adapter = instance
+        .request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        })
+        .await
+        .map_err(|e| {
+            format!(
+                "no Vulkan adapter ({e}); install a Vulkan driver (Debian: `mesa-vulkan-drivers` \
+                 for the lavapipe CPU driver, or the NVIDIA driver with `libvulkan1`)"
+            )
+        })?;
+    let info = adapter.get_info();
+    let limits = adapter.limits();
+    let (device, queue) = adapter
+        .request_device(&wgpu::DeviceDescriptor {
+            label: Some("orbit-physics-wgpu"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        })
+        .await
+        .map_err(|e| format!("the Vulkan adapter `{}` refused a device: {e}", info.name))?;
+    tracing::info!(adapter = %info.name, driver = %info.driver, "wgpu physics device");
+    Ok(Gpu {
+        device,
+        queue,
+        info,
+        limits,
+        pipelines: Mutex::new(HashMap::new()),
+    })
+}

@@ -1,0 +1,214 @@
+//! Where each quantity lives in the kernel's buffers. The state buffer holds exactly what the
+//! backend publishes, laid out as the batched views expect (per articulation: joint positions,
+//! velocities, bias forces and applied efforts, `num_envs × dofs` each, then link poses and
+//! velocities; per object: pose and velocities), so a readback is one copy. Every section
+//! starts at a multiple of 4 floats, so quaternion sections can be viewed as `Quat`s in place.
+
+use std::fmt::Write as _;
+
+use crate::compile::{CompiledScene, MAX_CONTACTS};
+
+/// Float offsets of one articulation's sections in the state and input buffers.
+#[derive(Clone, Debug)]
+pub struct ArticulationOffsets {
+    /// Dofs of this articulation.
+    pub dofs: usize,
+    /// Links of this articulation.
+    pub links: usize,
+    /// State: joint positions; velocities, bias forces and applied efforts follow, each
+    /// `num_envs × dofs` (padded to 4).
+    pub joints: usize,
+    /// Length of one joint section (padded).
+    pub joint_len: usize,
+    /// State: link positions (`× 3`), then quaternions (`× 4`), linear and angular velocities.
+    pub link_pos: usize,
+    /// State: link quaternions.
+    pub link_quat: usize,
+    /// State: link linear velocities.
+    pub link_lin: usize,
+    /// State: link angular velocities.
+    pub link_ang: usize,
+    /// Inputs: position targets; velocity targets and efforts follow (`joint_len` apart).
+    pub inputs: usize,
+}
+
+/// Float offsets of one free object's sections in the state buffer.
+#[derive(Clone, Debug)]
+pub struct ObjectOffsets {
+    /// Positions (`num_envs × 3`); quaternions, linear and angular velocities follow.
+    pub pos: usize,
+    /// Quaternions `(x, y, z, w)`.
+    pub quat: usize,
+    /// Origin linear velocities.
+    pub lin: usize,
+    /// Angular velocities.
+    pub ang: usize,
+}
+
+/// The whole buffer layout.
+#[derive(Clone, Debug)]
+pub struct BufferLayout {
+    /// Envs.
+    pub num_envs: usize,
+    /// Per articulation.
+    pub articulations: Vec<ArticulationOffsets>,
+    /// Per free object.
+    pub objects: Vec<ObjectOffsets>,
+    /// Floats in the state buffer.
+    pub state_len: usize,
+    /// Inputs: per-env mass scale of each body (`num_envs × bodies`).
+    pub mass_scale: usize,
+    /// Inputs: per-env friction of each shape (`num_envs × shapes`).
+    pub friction: usize,
+    /// Inputs: per-env flag "state was overwritten: do not warm-start".
+    pub fresh: usize,
+    /// Inputs: per dof (all envs), 1 where the bias forces are added to the effort input.
+    pub compensate: usize,
+    /// Floats in the input buffer.
+    pub inputs_len: usize,
+    /// Floats in the warm-start buffer.
+    pub warm_len: usize,
+}
+
+fn pad4(n: usize) -> usize {
+    n.div_ceil(4) * 4
+}
+
+impl BufferLayout {
+    /// The layout of a compiled scene for `num_envs` envs.
+    pub fn new(scene: &CompiledScene, num_envs: usize) -> Self {
+        let n = num_envs;
+        let mut state = 0;
+        let mut inputs = 0;
+        let mut articulations = Vec::new();
+        for &(_, links, _, dofs) in &scene.articulations {
+            let joint_len = pad4(n * dofs);
+            let joints = state;
+            state += 4 * joint_len;
+            let link_pos = state;
+            let link_quat = link_pos + pad4(n * links * 3);
+            let link_lin = link_quat + n * links * 4;
+            let link_ang = link_lin + pad4(n * links * 3);
+            state = link_ang + pad4(n * links * 3);
+            articulations.push(ArticulationOffsets {
+                dofs,
+                links,
+                joints,
+                joint_len,
+                link_pos,
+                link_quat,
+                link_lin,
+                link_ang,
+                inputs,
+            });
+            inputs += 3 * joint_len;
+        }
+        let mut objects = Vec::new();
+        for _ in &scene.objects {
+            let pos = state;
+            let quat = pos + pad4(n * 3);
+            let lin = quat + n * 4;
+            let ang = lin + pad4(n * 3);
+            state = ang + pad4(n * 3);
+            objects.push(ObjectOffsets {
+                pos,
+                quat,
+                lin,
+                ang,
+            });
+        }
+        let mass_scale = inputs;
+        let friction = mass_scale + pad4(n * scene.num_bodies());
+        let fresh = friction + pad4(n * scene.shapes.len());
+        let compensate = fresh + pad4(n);
+        let inputs_len = compensate + pad4(scene.dofs.len());
+        Self {
+            num_envs,
+            articulations,
+            objects,
+            state_len: state.max(4),
+            mass_scale,
+            friction,
+            fresh,
+            compensate,
+            inputs_len,
+            warm_len: n * MAX_CONTACTS * 4,
+        }
+    }
+
+    /// The `lay` table of env-count-dependent offsets the kernel reads: env count, the input
+    /// offsets (mass scale, friction, fresh, compensation), then per dof the state base, section length and input base, per link the
+    /// articulation's link block, per object its block (positions given by [`lay_constants`]).
+    pub fn table(&self, scene: &CompiledScene) -> Vec<u32> {
+        let mut t = vec![
+            self.num_envs as u32,
+            self.mass_scale as u32,
+            self.friction as u32,
+            self.fresh as u32,
+            self.compensate as u32,
+        ];
+        let arts = scene.articulations.iter().enumerate();
+        let per_dof = |f: &dyn Fn(&ArticulationOffsets, usize) -> usize| -> Vec<u32> {
+            arts.clone()
+                .flat_map(|(a, &(_, _, _, dofs))| (0..dofs).map(move |i| (a, i)))
+                .map(|(a, i)| f(&self.articulations[a], i) as u32)
+                .collect()
+        };
+        t.extend(per_dof(&|o, i| o.joints + i));
+        t.extend(per_dof(&|o, _| o.joint_len));
+        t.extend(per_dof(&|o, i| o.inputs + i));
+        for (a, &(_, links, _, _)) in scene.articulations.iter().enumerate() {
+            t.extend(std::iter::repeat_n(
+                self.articulations[a].link_pos as u32,
+                links,
+            ));
+        }
+        t.extend(self.objects.iter().map(|o| o.pos as u32));
+        t
+    }
+}
+
+/// The positions of the `lay` table's parts and the env-count-independent address tables, as
+/// WGSL constants.
+pub fn lay_constants(scene: &CompiledScene) -> String {
+    let (nd, nl) = (scene.dofs.len(), scene.links.len());
+    let mut s = String::new();
+    let mut c = |name: &str, v: usize| {
+        writeln!(s, "const {name} = {v}u;").expect("write to string");
+    };
+    c("LAY_NUM_ENVS", 0);
+    c("LAY_IN_MASS_SCALE", 1);
+    c("LAY_IN_FRICTION", 2);
+    c("LAY_IN_FRESH", 3);
+    c("LAY_IN_COMPENSATE", 4);
+    c("LAY_D_BASE", 5);
+    c("LAY_D_SECTION", 5 + nd);
+    c("LAY_D_IBASE", 5 + 2 * nd);
+    c("LAY_L_BLOCK", 5 + 3 * nd);
+    c("LAY_O_BLOCK", 5 + 3 * nd + nl);
+    c("NB1", scene.num_bodies().max(1));
+    let mut d_stride = Vec::new();
+    let (mut l_na, mut l_local) = (Vec::new(), Vec::new());
+    for &(_, links, _, dofs) in &scene.articulations {
+        d_stride.extend(std::iter::repeat_n(dofs, dofs));
+        l_na.extend(std::iter::repeat_n(links, links));
+        l_local.extend(0..links);
+    }
+    let mut table = |name: &str, len: &str, v: &[usize]| {
+        let items: Vec<String> = if v.is_empty() {
+            vec!["0u".into()]
+        } else {
+            v.iter().map(|x| format!("{x}u")).collect()
+        };
+        writeln!(
+            s,
+            "var<private> {name}: array<u32, {len}> = array<u32, {len}>({});",
+            items.join(", ")
+        )
+        .expect("write to string");
+    };
+    table("D_STRIDE", "ND1", &d_stride);
+    table("L_NA", "NL1", &l_na);
+    table("L_LOCAL", "NL1", &l_local);
+    s
+}

@@ -1,0 +1,618 @@
+//! orbit-physics-wgpu: the GPU physics backend. Every env is one invocation of a WGSL compute
+//! kernel that runs reduced-coordinate articulation dynamics (RNEA, CRBA, Cholesky), free rigid
+//! bodies, primitive contacts and a projected Gauss–Seidel solver with soft constraints and warm
+//! starting (see `src/step.wgsl` and `docs/physics.md`). All envs share one topology, compiled
+//! into the kernel's constants; state stays on the GPU between steps and is read back once per
+//! step in exactly the layout the batched views expose.
+//!
+//! Determinism: each env is computed by a fixed sequence of operations in one invocation, with
+//! no atomics; the same inputs give the same bits on the same device.
+
+mod compile;
+mod gpu;
+mod layout;
+
+use std::sync::Arc;
+
+use glam::{Quat, Vec3, Vec4};
+use orbit_core::physics::{
+    ArticulationView, BackendRegistration, BodyRef, PhysicsBackend, PhysicsError, RigidObjectView,
+    SceneLayout, SimCfg, check_batch, check_env_ids,
+};
+use orbit_core::scene::{RootState, SceneDesc};
+
+pub use compile::{MAX_CONTACTS, MAX_DOFS, MAX_LINKS};
+pub use gpu::{Gpu, gpu};
+
+use compile::CompiledScene;
+use layout::BufferLayout;
+
+/// Name under which this backend is registered.
+pub const BACKEND_NAME: &str = "wgpu";
+
+inventory::submit! {
+    BackendRegistration {
+        name: BACKEND_NAME,
+        description: "GPU: all envs in one WGSL compute kernel (wgpu, Vulkan)",
+        build: |scene, num_envs, sim| Ok(Box::new(WgpuBackend::new(scene, num_envs, sim)?)),
+    }
+}
+
+const WORKGROUP: usize = 64;
+
+/// The GPU backend.
+pub struct WgpuBackend {
+    layout: SceneLayout,
+    scene: CompiledScene,
+    buffers: BufferLayout,
+    sim: SimCfg,
+    gpu: Arc<Gpu>,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    state_buf: wgpu::Buffer,
+    inputs_buf: wgpu::Buffer,
+    params_buf: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    /// Mirror of the state buffer after the last readback (16-byte aligned for `Quat` views).
+    state: Vec<Vec4>,
+    /// Mirror of the input buffer.
+    inputs: Vec<f32>,
+    inputs_dirty: bool,
+    /// Default masses of links then objects, for mass scales.
+    default_masses: Vec<f32>,
+    /// Entries of the layout table.
+    lay_len: usize,
+}
+
+fn err(reason: String) -> PhysicsError {
+    PhysicsError::Unsupported {
+        backend: BACKEND_NAME.into(),
+        reason,
+    }
+}
+
+impl WgpuBackend {
+    /// Builds `num_envs` copies of `scene` on the process's GPU.
+    pub fn new(desc: &SceneDesc, num_envs: usize, sim: &SimCfg) -> Result<Self, PhysicsError> {
+        sim.validate()?;
+        if num_envs == 0 {
+            return Err(PhysicsError::InvalidInput(
+                "num_envs must be at least 1".into(),
+            ));
+        }
+        let scene = CompiledScene::new(desc)?;
+        let gpu = gpu::gpu().map_err(err)?;
+        let buffers = BufferLayout::new(&scene, num_envs);
+        let limits = &gpu.limits;
+        let groups = num_envs.div_ceil(WORKGROUP);
+        if groups > limits.max_compute_workgroups_per_dimension as usize {
+            return Err(err(format!(
+                "{num_envs} envs need {groups} workgroups of {WORKGROUP}, more than the device's {}",
+                limits.max_compute_workgroups_per_dimension
+            )));
+        }
+        let largest = buffers
+            .state_len
+            .max(buffers.inputs_len)
+            .max(buffers.warm_len) as u64
+            * 4;
+        let max_binding = limits.max_storage_buffer_binding_size;
+        if largest > max_binding.min(limits.max_buffer_size) {
+            return Err(err(format!(
+                "{num_envs} envs need a {largest}-byte buffer; the device allows {} bytes per storage binding: use fewer envs",
+                max_binding
+            )));
+        }
+        let source = format!(
+            "{}{}{}",
+            scene.wgsl_prelude(sim),
+            layout::lay_constants(&scene),
+            include_str!("step.wgsl")
+        );
+        let pipeline = gpu.pipeline(&source);
+        let device = &gpu.device;
+        let storage = |label: &str, floats: usize| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (floats.max(4) * 4) as u64,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let state_buf = storage("orbit state", buffers.state_len);
+        let inputs_buf = storage("orbit inputs", buffers.inputs_len);
+        let warm_buf = storage("orbit warm start", buffers.warm_len);
+        let table = buffers.table(&scene);
+        let lay_buf = storage("orbit layout", table.len());
+        gpu.queue
+            .write_buffer(&lay_buf, 0, bytemuck::cast_slice(&table));
+        let params_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("orbit params"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("orbit readback"),
+            size: (buffers.state_len * 4) as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("orbit step"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: state_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: inputs_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: warm_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: params_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: lay_buf.as_entire_binding(),
+                },
+            ],
+        });
+        let default_masses = scene
+            .links
+            .iter()
+            .map(|l| l.inertial.mass)
+            .chain(scene.objects.iter().map(|o| o.mass))
+            .collect();
+        let mut backend = Self {
+            layout: SceneLayout::from_desc(desc),
+            scene,
+            sim: sim.clone(),
+            gpu,
+            pipeline,
+            bind_group,
+            state_buf,
+            inputs_buf,
+            params_buf,
+            staging,
+            state: vec![Vec4::ZERO; buffers.state_len.div_ceil(4)],
+            inputs: vec![0.0; buffers.inputs_len],
+            inputs_dirty: true,
+            default_masses,
+            lay_len: table.len(),
+            buffers,
+        };
+        backend.init_state(desc);
+        backend.upload_state();
+        // Mark every env fresh (nothing to warm-start from) and publish the initial state.
+        backend.refresh_all();
+        Ok(backend)
+    }
+
+    /// The adapter the backend runs on.
+    pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
+        &self.gpu.info
+    }
+
+    fn state_f32(&self) -> &[f32] {
+        bytemuck::cast_slice(&self.state)
+    }
+
+    fn state_f32_mut(&mut self) -> &mut [f32] {
+        bytemuck::cast_slice_mut(&mut self.state)
+    }
+
+    /// Default joint state, object root states, unit mass scales and the shapes' frictions.
+    fn init_state(&mut self, desc: &SceneDesc) {
+        let n = self.buffers.num_envs;
+        for (a, art) in desc.articulations.iter().enumerate() {
+            let off = self.buffers.articulations[a].clone();
+            let dofs = off.dofs;
+            for e in 0..n {
+                for i in 0..dofs {
+                    let s = self.state_f32_mut();
+                    s[off.joints + e * dofs + i] = art.default_joint_pos[i];
+                    s[off.joints + off.joint_len + e * dofs + i] = art.default_joint_vel[i];
+                    self.inputs[off.inputs + e * dofs + i] = art.default_joint_pos[i];
+                    self.inputs[off.inputs + off.joint_len + e * dofs + i] =
+                        art.default_joint_vel[i];
+                }
+            }
+        }
+        for (o, obj) in desc.rigid_objects.iter().enumerate() {
+            let states = vec![obj.default_root_state; n];
+            self.put_root_states(o, &(0..n).collect::<Vec<_>>(), &states);
+        }
+        let bodies = self.scene.num_bodies();
+        let shapes = self.scene.shapes.len();
+        for e in 0..n {
+            for b in 0..bodies {
+                self.inputs[self.buffers.mass_scale + e * bodies + b] = 1.0;
+            }
+            for s in 0..shapes {
+                self.inputs[self.buffers.friction + e * shapes + s] = self.scene.shapes[s].friction;
+            }
+        }
+    }
+
+    fn put_root_states(&mut self, o: usize, env_ids: &[usize], states: &[RootState]) {
+        let off = self.buffers.objects[o].clone();
+        let s = self.state_f32_mut();
+        for (&e, st) in env_ids.iter().zip(states) {
+            s[off.pos + e * 3..off.pos + e * 3 + 3].copy_from_slice(&st.pose.pos.to_array());
+            s[off.quat + e * 4..off.quat + e * 4 + 4]
+                .copy_from_slice(&st.pose.rot.normalize().to_array());
+            s[off.lin + e * 3..off.lin + e * 3 + 3].copy_from_slice(&st.lin_vel.to_array());
+            s[off.ang + e * 3..off.ang + e * 3 + 3].copy_from_slice(&st.ang_vel.to_array());
+        }
+    }
+
+    fn upload_state(&self) {
+        self.gpu
+            .queue
+            .write_buffer(&self.state_buf, 0, bytemuck::cast_slice(self.state_f32()));
+    }
+
+    fn upload_inputs(&mut self) {
+        if self.inputs_dirty {
+            self.gpu
+                .queue
+                .write_buffer(&self.inputs_buf, 0, bytemuck::cast_slice(&self.inputs));
+            self.inputs_dirty = false;
+        }
+    }
+
+    /// Runs `substeps` substeps (0: only recompute what is published) and reads the state back.
+    fn dispatch(&mut self, substeps: u32) -> Result<(), PhysicsError> {
+        self.upload_inputs();
+        let gpu = self.gpu.clone();
+        let queue = &gpu.queue;
+        queue.write_buffer(
+            &self.params_buf,
+            0,
+            bytemuck::cast_slice(&[substeps, 0u32, 0, 0]),
+        );
+        let device = &gpu.device;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("orbit step"),
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("orbit step"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(self.buffers.num_envs.div_ceil(WORKGROUP) as u32, 1, 1);
+        }
+        let bytes = (self.buffers.state_len * 4) as u64;
+        encoder.copy_buffer_to_buffer(&self.state_buf, 0, &self.staging, 0, bytes);
+        queue.submit([encoder.finish()]);
+        let slice = self.staging.slice(..bytes);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| err(format!("the GPU did not finish the step: {e}")))?;
+        {
+            let view = slice
+                .get_mapped_range()
+                .map_err(|e| err(format!("reading the state back failed: {e}")))?;
+            let len = self.buffers.state_len;
+            let state: &mut [f32] = bytemuck::cast_slice_mut(&mut self.state);
+            state[..len].copy_from_slice(bytemuck::cast_slice(&view));
+        }
+        self.staging.unmap();
+        // Fresh flags apply to one dispatch.
+        let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
+        if self.inputs[fresh..fresh + n].iter().any(|&f| f != 0.0) {
+            self.inputs[fresh..fresh + n].fill(0.0);
+            self.inputs_dirty = true;
+        }
+        Ok(())
+    }
+
+    /// Marks every env fresh and republishes (after construction).
+    fn refresh_all(&mut self) {
+        let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
+        self.inputs[fresh..fresh + n].fill(1.0);
+        self.inputs_dirty = true;
+        self.dispatch(0)
+            .expect("the initial publish dispatch of a validated scene");
+    }
+
+    /// After a state write: drop warm starts of those envs and republish.
+    fn after_write(&mut self, env_ids: &[usize]) -> Result<(), PhysicsError> {
+        let fresh = self.buffers.fresh;
+        for &e in env_ids {
+            self.inputs[fresh + e] = 1.0;
+        }
+        self.inputs_dirty = true;
+        self.upload_state();
+        self.dispatch(0)
+    }
+
+    fn check_articulation(&self, a: usize) -> Result<layout::ArticulationOffsets, PhysicsError> {
+        self.buffers.articulations.get(a).cloned().ok_or_else(|| {
+            PhysicsError::InvalidInput(format!(
+                "articulation index {a} out of range ({} articulations)",
+                self.buffers.articulations.len()
+            ))
+        })
+    }
+
+    /// Copies a full `num_envs × dofs` input batch into input quantity `k`.
+    fn set_inputs(
+        &mut self,
+        a: usize,
+        k: usize,
+        what: &str,
+        values: &[f32],
+    ) -> Result<(), PhysicsError> {
+        let off = self.check_articulation(a)?;
+        check_batch(what, values, self.buffers.num_envs, off.dofs)?;
+        let start = off.inputs + k * off.joint_len;
+        self.inputs[start..start + values.len()].copy_from_slice(values);
+        self.inputs_dirty = true;
+        Ok(())
+    }
+
+    /// Global body index of a body reference, checked.
+    fn body_index(&self, body: BodyRef) -> Result<usize, PhysicsError> {
+        match body {
+            BodyRef::Link { articulation, link } => {
+                let &(first, links, _, _) =
+                    self.scene.articulations.get(articulation).ok_or_else(|| {
+                        PhysicsError::InvalidInput(format!(
+                            "articulation index {articulation} out of range"
+                        ))
+                    })?;
+                if link >= links {
+                    return Err(PhysicsError::InvalidInput(format!(
+                        "link index {link} out of range ({links} links)"
+                    )));
+                }
+                Ok(first + link)
+            }
+            BodyRef::RigidObject(o) => {
+                if o >= self.scene.objects.len() {
+                    return Err(PhysicsError::InvalidInput(format!(
+                        "rigid object index {o} out of range"
+                    )));
+                }
+                Ok(self.scene.links.len() + o)
+            }
+        }
+    }
+}
+
+impl PhysicsBackend for WgpuBackend {
+    fn name(&self) -> &'static str {
+        BACKEND_NAME
+    }
+
+    fn num_envs(&self) -> usize {
+        self.buffers.num_envs
+    }
+
+    fn layout(&self) -> &SceneLayout {
+        &self.layout
+    }
+
+    fn dt(&self) -> f32 {
+        self.sim.dt
+    }
+
+    fn device_memory_bytes(&self) -> usize {
+        // State, inputs, warm starts, the readback copy and the layout table.
+        let b = &self.buffers;
+        4 * (2 * b.state_len + b.inputs_len + b.warm_len + self.lay_len)
+    }
+
+    fn step(&mut self) -> Result<(), PhysicsError> {
+        self.dispatch(1)
+    }
+
+    fn step_n(&mut self, n: usize) -> Result<(), PhysicsError> {
+        if n == 0 {
+            return Ok(());
+        }
+        let n = u32::try_from(n)
+            .map_err(|_| PhysicsError::InvalidInput(format!("{n} steps in one call")))?;
+        self.dispatch(n)
+    }
+
+    fn articulation(&self, a: usize) -> ArticulationView<'_> {
+        let off = &self.buffers.articulations[a];
+        let n = self.buffers.num_envs;
+        let s = self.state_f32();
+        let (d, l) = (n * off.dofs, n * off.links);
+        let j = |k: usize| &s[off.joints + k * off.joint_len..off.joints + k * off.joint_len + d];
+        ArticulationView {
+            num_links: off.links,
+            joint_pos: j(0),
+            joint_vel: j(1),
+            bias_forces: j(2),
+            applied_effort: j(3),
+            link_pos: bytemuck::cast_slice(&s[off.link_pos..off.link_pos + 3 * l]),
+            link_quat: bytemuck::cast_slice(&s[off.link_quat..off.link_quat + 4 * l]),
+            link_lin_vel: bytemuck::cast_slice(&s[off.link_lin..off.link_lin + 3 * l]),
+            link_ang_vel: bytemuck::cast_slice(&s[off.link_ang..off.link_ang + 3 * l]),
+        }
+    }
+
+    fn rigid_object(&self, o: usize) -> RigidObjectView<'_> {
+        let off = &self.buffers.objects[o];
+        let n = self.buffers.num_envs;
+        let s = self.state_f32();
+        RigidObjectView {
+            pos: bytemuck::cast_slice::<f32, Vec3>(&s[off.pos..off.pos + 3 * n]),
+            quat: bytemuck::cast_slice::<f32, Quat>(&s[off.quat..off.quat + 4 * n]),
+            lin_vel: bytemuck::cast_slice(&s[off.lin..off.lin + 3 * n]),
+            ang_vel: bytemuck::cast_slice(&s[off.ang..off.ang + 3 * n]),
+        }
+    }
+
+    fn set_joint_position_targets(
+        &mut self,
+        a: usize,
+        targets: &[f32],
+    ) -> Result<(), PhysicsError> {
+        self.set_inputs(a, 0, "joint position targets", targets)
+    }
+
+    fn set_joint_velocity_targets(
+        &mut self,
+        a: usize,
+        targets: &[f32],
+    ) -> Result<(), PhysicsError> {
+        self.set_inputs(a, 1, "joint velocity targets", targets)
+    }
+
+    fn set_joint_efforts(&mut self, a: usize, efforts: &[f32]) -> Result<(), PhysicsError> {
+        self.set_inputs(a, 2, "joint efforts", efforts)
+    }
+
+    fn set_bias_compensation(
+        &mut self,
+        a: usize,
+        dofs: &[usize],
+        enabled: bool,
+    ) -> Result<(), PhysicsError> {
+        let n = self.check_articulation(a)?.dofs;
+        if let Some(d) = dofs.iter().find(|&&d| d >= n) {
+            return Err(PhysicsError::InvalidInput(format!(
+                "bias compensation: dof {d} out of range ({n} dofs)"
+            )));
+        }
+        let first = self.scene.articulations[a].2;
+        for &d in dofs {
+            self.inputs[self.buffers.compensate + first + d] = if enabled { 1.0 } else { 0.0 };
+        }
+        self.inputs_dirty = true;
+        Ok(())
+    }
+
+    fn write_joint_state(
+        &mut self,
+        a: usize,
+        env_ids: &[usize],
+        pos: &[f32],
+        vel: &[f32],
+    ) -> Result<(), PhysicsError> {
+        let off = self.check_articulation(a)?;
+        check_env_ids(env_ids, self.buffers.num_envs)?;
+        let dofs = off.dofs;
+        check_batch("joint positions", pos, env_ids.len(), dofs)?;
+        check_batch("joint velocities", vel, env_ids.len(), dofs)?;
+        let s = self.state_f32_mut();
+        for (i, &e) in env_ids.iter().enumerate() {
+            let row = off.joints + e * dofs;
+            s[row..row + dofs].copy_from_slice(&pos[i * dofs..(i + 1) * dofs]);
+            let row = row + off.joint_len;
+            s[row..row + dofs].copy_from_slice(&vel[i * dofs..(i + 1) * dofs]);
+        }
+        self.after_write(env_ids)
+    }
+
+    fn write_root_state(
+        &mut self,
+        o: usize,
+        env_ids: &[usize],
+        states: &[RootState],
+    ) -> Result<(), PhysicsError> {
+        if o >= self.buffers.objects.len() {
+            return Err(PhysicsError::InvalidInput(format!(
+                "rigid object index {o} out of range ({} objects)",
+                self.buffers.objects.len()
+            )));
+        }
+        check_env_ids(env_ids, self.buffers.num_envs)?;
+        if states.len() != env_ids.len() {
+            return Err(PhysicsError::InvalidInput(format!(
+                "root states: expected {} states, got {}",
+                env_ids.len(),
+                states.len()
+            )));
+        }
+        let finite = |s: &RootState| {
+            s.pose.pos.is_finite()
+                && s.pose.rot.is_finite()
+                && s.pose.rot.length() > 1e-6
+                && s.lin_vel.is_finite()
+                && s.ang_vel.is_finite()
+        };
+        if let Some(bad) = states.iter().position(|s| !finite(s)) {
+            return Err(PhysicsError::InvalidInput(format!(
+                "root state {bad} is not finite or has a zero quaternion"
+            )));
+        }
+        self.put_root_states(o, env_ids, states);
+        self.after_write(env_ids)
+    }
+
+    fn set_masses(
+        &mut self,
+        body: BodyRef,
+        env_ids: &[usize],
+        masses: &[f32],
+    ) -> Result<(), PhysicsError> {
+        let b = self.body_index(body)?;
+        check_env_ids(env_ids, self.buffers.num_envs)?;
+        check_batch("masses", masses, env_ids.len(), 1)?;
+        if let Some(m) = masses.iter().find(|m| **m <= 0.0) {
+            return Err(PhysicsError::InvalidInput(format!(
+                "masses must be > 0, got {m}"
+            )));
+        }
+        let default = self.default_masses[b];
+        if default <= 0.0 {
+            return Err(PhysicsError::InvalidInput(format!(
+                "body {body:?} has no mass to scale"
+            )));
+        }
+        let bodies = self.scene.num_bodies();
+        for (&e, &m) in env_ids.iter().zip(masses) {
+            self.inputs[self.buffers.mass_scale + e * bodies + b] = m / default;
+        }
+        self.inputs_dirty = true;
+        // Bias forces depend on the masses: republish.
+        self.dispatch(0)
+    }
+
+    fn set_friction(
+        &mut self,
+        body: BodyRef,
+        env_ids: &[usize],
+        friction: &[f32],
+    ) -> Result<(), PhysicsError> {
+        let b = self.body_index(body)?;
+        check_env_ids(env_ids, self.buffers.num_envs)?;
+        check_batch("friction", friction, env_ids.len(), 1)?;
+        if let Some(f) = friction.iter().find(|f| **f < 0.0) {
+            return Err(PhysicsError::InvalidInput(format!(
+                "friction must be >= 0, got {f}"
+            )));
+        }
+        let shapes = self.scene.shapes.len();
+        for (s, shape) in self.scene.shapes.iter().enumerate() {
+            if shape.body == Some(b) {
+                for (&e, &f) in env_ids.iter().zip(friction) {
+                    self.inputs[self.buffers.friction + e * shapes + s] = f;
+                }
+            }
+        }
+        self.inputs_dirty = true;
+        Ok(())
+    }
+}

