@@ -588,6 +588,20 @@ impl CompiledScene {
             "NS1",
             shapes.iter().map(|x| v3(x.size)).collect(),
         );
+        // Bounding-sphere radius about the shape origin (planes: unbounded), for pair culling.
+        let radius = |x: &ShapeData| match x.kind {
+            ShapeKind::Sphere => x.size.x,
+            ShapeKind::Capsule => x.size.x + x.size.y,
+            ShapeKind::Box => x.size.length(),
+            ShapeKind::Plane => f32::INFINITY,
+        };
+        arr(
+            &mut s,
+            "S_RADIUS",
+            "f32",
+            "NS1",
+            shapes.iter().map(|x| f(radius(x))).collect(),
+        );
         arr(
             &mut s,
             "S_PRIORITY",

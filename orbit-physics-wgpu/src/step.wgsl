@@ -645,8 +645,12 @@ fn collide() {
         let b = P_B[pi];
         let slot = P_SLOT[pi];
         let apos = shape_pose_pos(a);
-        let arot = shape_pose_rot(a);
         let bpos = shape_pose_pos(b);
+        // Bounding spheres apart by more than the margin: no contact can come of this pair.
+        if distance(apos, bpos) > S_RADIUS[a] + S_RADIUS[b] + MARGIN {
+            continue;
+        }
+        let arot = shape_pose_rot(a);
         let brot = shape_pose_rot(b);
         let ka = S_KIND[a];
         let kb = S_KIND[b];

@@ -3,25 +3,7 @@
 
 use orbit_physics_wgpu::BACKEND_NAME;
 
-/// Whether a GPU is available; panics if one is required and missing.
-fn gpu_available() -> bool {
-    match orbit_physics_wgpu::gpu() {
-        Ok(gpu) => {
-            eprintln!(
-                "wgpu adapter: {} ({:?})",
-                gpu.info.name, gpu.info.device_type
-            );
-            true
-        }
-        Err(e) if std::env::var("ORBIT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("ORBIT_REQUIRE_GPU=1 but no GPU: {e}")
-        }
-        Err(e) => {
-            eprintln!("SKIPPED: no Vulkan adapter for the wgpu backend: {e}");
-            false
-        }
-    }
-}
+use orbit_physics_wgpu::gpu_available_for_tests as gpu_available;
 
 #[test]
 fn free_fall() {
