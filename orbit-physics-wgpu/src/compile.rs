@@ -18,7 +18,7 @@ pub const MAX_DOFS: usize = 16;
 /// Largest number of links (all articulations of an env together).
 pub const MAX_LINKS: usize = 32;
 /// Contacts kept per env and substep; further candidates replace the shallowest.
-pub const MAX_CONTACTS: usize = 24;
+pub const MAX_CONTACTS: usize = 12;
 /// Contacts are generated up to this gap (m) and solved speculatively.
 pub const CONTACT_MARGIN: f32 = 0.005;
 /// Natural frequency (rad/s) of the soft contact and joint-limit constraints: a resting box

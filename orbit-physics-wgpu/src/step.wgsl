@@ -967,10 +967,10 @@ fn store_warm() {
     }
 }
 
-// Projected Gauss–Seidel over the rows; `soft` uses the rows' soft-constraint bias, otherwise
-// (relaxation after the position update) rows are rigid and unbiased.
-fn solve(soft: bool) {
-    for (var it = 0u; it < ITERATIONS; it++) {
+// `sweeps` of projected Gauss–Seidel over the rows; `soft` uses the rows' soft-constraint bias,
+// otherwise (relaxation after the position update) rows are rigid and unbiased.
+fn solve(soft: bool, sweeps: u32) {
+    for (var it = 0u; it < sweeps; it++) {
         for (var r = 0u; r < nr; r++) {
             let kind = r_kind[r];
             if kind == 0u || kind == 3u {
@@ -1036,9 +1036,10 @@ fn substep() {
     collide();
     build_rows();
     warm_start();
-    solve(true);
+    solve(true, ITERATIONS);
     integrate();
-    solve(false);
+    // Relaxation removes the velocity the soft bias added (Box2D's relax step).
+    solve(false, ITERATIONS);
     store_warm();
 }
 
