@@ -52,7 +52,7 @@ impl TermContext<'_> {
 }
 
 /// An observation term: writes `num_envs × dim` values.
-pub trait ObservationTerm: Send {
+pub trait ObservationTerm: Send + Sync {
     /// Values per env.
     fn dim(&self) -> usize;
     /// Computes the term for all envs into `out` (row-major, `num_envs × dim`).
@@ -60,19 +60,19 @@ pub trait ObservationTerm: Send {
 }
 
 /// A reward term: writes one value per env (before weight and `step_dt`).
-pub trait RewardTerm: Send {
+pub trait RewardTerm: Send + Sync {
     /// Computes the term for all envs.
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]);
 }
 
 /// A termination term: writes one flag per env.
-pub trait TerminationTerm: Send {
+pub trait TerminationTerm: Send + Sync {
     /// Computes the term for all envs.
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [bool]);
 }
 
 /// An action term: turns its slice of the policy action into backend inputs.
-pub trait ActionTerm: Send {
+pub trait ActionTerm: Send + Sync {
     /// Action values per env.
     fn dim(&self) -> usize;
     /// Processes the raw actions (`num_envs × dim`), once per env step.
@@ -92,7 +92,7 @@ pub trait ActionTerm: Send {
 }
 
 /// An event term, applied to a set of envs.
-pub trait EventTerm: Send {
+pub trait EventTerm: Send + Sync {
     /// Applies the event to the listed envs; `rng` yields each env's random stream.
     fn apply(
         &mut self,
@@ -103,7 +103,7 @@ pub trait EventTerm: Send {
 }
 
 /// A command term: a per-env command vector resampled on reset and on a timer.
-pub trait CommandTerm: Send {
+pub trait CommandTerm: Send + Sync {
     /// Command values per env.
     fn dim(&self) -> usize;
     /// The commands, `num_envs × dim`.
@@ -180,7 +180,7 @@ registry!(
 );
 
 /// A curriculum term: runs when some envs reset and may change other managers (reward weights).
-pub trait CurriculumTerm: Send {
+pub trait CurriculumTerm: Send + Sync {
     /// Updates the curriculum; returns a value to log as `Curriculum/<term>`, if any.
     fn compute(
         &mut self,

@@ -191,7 +191,7 @@ pub enum BodyRef {
 /// Writes take full batches (`num_envs` rows) or rows for a set of env ids; reads return
 /// borrowed batched arrays refreshed by every [`step`](PhysicsBackend::step) and every state
 /// write. Invalid input returns an error and changes nothing.
-pub trait PhysicsBackend: Send {
+pub trait PhysicsBackend: Send + Sync {
     /// The registered backend name.
     fn name(&self) -> &'static str;
     /// Number of environments.

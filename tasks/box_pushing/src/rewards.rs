@@ -5,6 +5,7 @@ use glam::{Quat, Vec3};
 use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
 use orbit_managers::term::{RewardTerm, RewardTermDef, TermContext};
 use orbit_managers::{EnvError, EnvView};
+use rayon::prelude::*;
 use serde::Deserialize;
 
 /// Scene names the box-pushing terms refer to.
@@ -159,56 +160,69 @@ impl RewardTerm for BoxPushingTerm {
         let processed = env.actions.processed(&self.refs.action);
         let down = Quat::from_xyzw(1.0, 0.0, 0.0, 0.0);
         let n = out.len();
-        for (e, o) in out.iter_mut().enumerate() {
-            if self.refs.only_at_end && env.episode_length[e] < env.max_episode_length {
-                *o = 0.0;
-                continue;
-            }
-            *o = match self.quantity {
-                Quantity::RodTipDistance => {
-                    let tip = self.refs.frame(env, e, self.refs.rod_tip).pos;
-                    (objects.pos[e] - tip).length().clamp(0.05, 100.0)
+        let this = &*self;
+        // Envs are independent: computed in parallel, each by the same operations.
+        out.par_iter_mut()
+            .with_min_len(PAR_MIN_ENVS)
+            .enumerate()
+            .for_each(|(e, o)| {
+                if this.refs.only_at_end && env.episode_length[e] < env.max_episode_length {
+                    *o = 0.0;
+                    return;
                 }
-                Quantity::GoalDistance => (objects.pos[e] - self.refs.target(env, e).0).length(),
-                Quantity::GoalRotation => {
-                    rotation_distance(objects.quat[e], self.refs.target(env, e).1)
-                        / std::f32::consts::PI
-                }
-                Quantity::RodInclination => {
-                    let phi = rotation_distance(self.refs.frame(env, e, self.refs.rod).rot, down);
-                    if phi > std::f32::consts::FRAC_PI_4 {
-                        phi / std::f32::consts::PI
-                    } else {
-                        0.0
+                *o = match this.quantity {
+                    Quantity::RodTipDistance => {
+                        let tip = this.refs.frame(env, e, this.refs.rod_tip).pos;
+                        (objects.pos[e] - tip).length().clamp(0.05, 100.0)
                     }
-                }
-                Quantity::Energy => processed.map_or(0.0, |u| {
-                    let d = u.len() / n;
-                    u[e * d..(e + 1) * d].iter().map(|x| x * x).sum()
-                }),
-                Quantity::JointSpeed => {
-                    let v = env.scene.backend.articulation(self.refs.robot).joint_vel;
-                    let d = v.len() / n;
-                    v[e * d..(e + 1) * d]
-                        .iter()
-                        .map(|x| x * x)
-                        .sum::<f32>()
-                        .sqrt()
-                }
-                Quantity::SpatialBonus => {
-                    let (p, q) = self.refs.target(env, e);
-                    let d = (objects.pos[e] - p).length();
-                    let rho = rotation_distance(objects.quat[e], q) / std::f32::consts::PI;
-                    if d < 0.1 {
-                        300.0 + (-1050.0 * d).clamp(-100.0, 0.0) + (-150.0 * rho).clamp(-100.0, 0.0)
-                    } else {
-                        0.0
+                    Quantity::GoalDistance => {
+                        (objects.pos[e] - this.refs.target(env, e).0).length()
                     }
-                }
-            };
-        }
+                    Quantity::GoalRotation => {
+                        rotation_distance(objects.quat[e], this.refs.target(env, e).1)
+                            / std::f32::consts::PI
+                    }
+                    Quantity::RodInclination => {
+                        let phi =
+                            rotation_distance(this.refs.frame(env, e, this.refs.rod).rot, down);
+                        if phi > std::f32::consts::FRAC_PI_4 {
+                            phi / std::f32::consts::PI
+                        } else {
+                            0.0
+                        }
+                    }
+                    Quantity::Energy => processed.map_or(0.0, |u| {
+                        let d = u.len() / n;
+                        u[e * d..(e + 1) * d].iter().map(|x| x * x).sum()
+                    }),
+                    Quantity::JointSpeed => {
+                        let v = env.scene.backend.articulation(this.refs.robot).joint_vel;
+                        let d = v.len() / n;
+                        v[e * d..(e + 1) * d]
+                            .iter()
+                            .map(|x| x * x)
+                            .sum::<f32>()
+                            .sqrt()
+                    }
+                    Quantity::SpatialBonus => {
+                        let (p, q) = this.refs.target(env, e);
+                        let d = (objects.pos[e] - p).length();
+                        let rho = rotation_distance(objects.quat[e], q) / std::f32::consts::PI;
+                        if d < 0.1 {
+                            300.0
+                                + (-1050.0 * d).clamp(-100.0, 0.0)
+                                + (-150.0 * rho).clamp(-100.0, 0.0)
+                        } else {
+                            0.0
+                        }
+                    }
+                };
+            });
     }
 }
+
+/// Below this many envs a term runs on one thread (parallel overhead would dominate).
+const PAR_MIN_ENVS: usize = 512;
 
 fn term(ctx: &TermContext<'_>, quantity: Quantity) -> Result<Box<dyn RewardTerm>, EnvError> {
     Ok(Box::new(BoxPushingTerm {
