@@ -176,6 +176,29 @@ pub struct RolloutAgreement {
     pub box_final: f64,
 }
 
+/// Asserts the MuJoCo rollouts' agreement (figures in docs/fidelity.md): every case within
+/// 0.005 rad joint RMS while the arm moves freely, before the rod first pushes the box, and the
+/// ProMP cases within `promp_tolerance` rad over the whole episode (the open-loop `torque_sine`
+/// case diverges through contact and joint-limit impacts, and is only reported).
+pub fn franka_tracks_mujoco_rollouts(backend: &str, promp_tolerance: f64) {
+    for r in franka_mujoco_rollouts(backend) {
+        assert!(
+            r.joint_rms_before_contact <= 0.005,
+            "{}: joint RMS before contact {} rad exceeds 0.005 rad",
+            r.name,
+            r.joint_rms_before_contact
+        );
+        if r.name.starts_with("promp") {
+            assert!(
+                r.joint_rms <= promp_tolerance,
+                "{}: joint RMS {} rad exceeds {promp_tolerance} rad",
+                r.name,
+                r.joint_rms
+            );
+        }
+    }
+}
+
 /// Replays the MuJoCo reference rollouts (`shared/reference/mujoco_box_pushing_rollouts.json`)
 /// with Fancy Gym's torque law `τ = clip(10 clip(a, −1, 1) + bias, ±τ_max)`, the action either
 /// recorded (`normalized_torque`) or recomputed by the ProMP PD controller from the current state

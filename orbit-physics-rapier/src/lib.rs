@@ -17,7 +17,8 @@ mod hooks;
 use glam::{Quat, Vec3};
 use orbit_core::physics::{
     ArticulationView, BackendRegistration, BodyRef, PhysicsBackend, PhysicsError, RigidObjectView,
-    SceneLayout, SimCfg, check_batch, check_env_ids,
+    SceneLayout, SimCfg, check_batch, check_dof_ids, check_env_ids, check_root_states,
+    check_values,
 };
 use orbit_core::scene::{Inertial, JointDrive, RootState, SceneDesc};
 use rayon::prelude::*;
@@ -357,12 +358,7 @@ impl PhysicsBackend for RapierBackend {
         dofs: &[usize],
         enabled: bool,
     ) -> Result<(), PhysicsError> {
-        let n = self.check_articulation(a)?.dofs;
-        if let Some(d) = dofs.iter().find(|&&d| d >= n) {
-            return Err(PhysicsError::InvalidInput(format!(
-                "bias compensation: dof {d} out of range ({n} dofs)"
-            )));
-        }
+        check_dof_ids(dofs, self.check_articulation(a)?.dofs)?;
         for &d in dofs {
             self.arts[a].compensate[d] = enabled;
         }
@@ -396,24 +392,7 @@ impl PhysicsBackend for RapierBackend {
     ) -> Result<(), PhysicsError> {
         self.body_handle(BodyRef::RigidObject(o))?;
         check_env_ids(env_ids, self.envs.len())?;
-        if states.len() != env_ids.len() {
-            return Err(PhysicsError::InvalidInput(format!(
-                "root states: expected {} states (one per env id), got {}",
-                env_ids.len(),
-                states.len()
-            )));
-        }
-        for s in states {
-            let finite = s.pose.pos.is_finite()
-                && s.pose.rot.is_finite()
-                && s.lin_vel.is_finite()
-                && s.ang_vel.is_finite();
-            if !finite || (s.pose.rot.length() - 1.0).abs() > 1e-3 {
-                return Err(PhysicsError::InvalidInput(format!(
-                    "root state {s:?} must be finite with a unit quaternion"
-                )));
-            }
-        }
+        check_root_states(states, env_ids.len())?;
         for (&e, s) in env_ids.iter().zip(states) {
             self.envs[e].write_root_state(o, s);
         }
@@ -429,12 +408,7 @@ impl PhysicsBackend for RapierBackend {
     ) -> Result<(), PhysicsError> {
         self.body_handle(body)?;
         check_env_ids(env_ids, self.envs.len())?;
-        check_batch("masses", masses, env_ids.len(), 1)?;
-        if let Some(m) = masses.iter().find(|m| **m <= 0.0) {
-            return Err(PhysicsError::InvalidInput(format!(
-                "masses must be > 0, got {m}"
-            )));
-        }
+        check_values("masses", masses, env_ids.len(), "> 0", |m| m > 0.0)?;
         for (&e, &m) in env_ids.iter().zip(masses) {
             match body {
                 BodyRef::Link { articulation, link } => {
@@ -464,12 +438,7 @@ impl PhysicsBackend for RapierBackend {
     ) -> Result<(), PhysicsError> {
         self.body_handle(body)?;
         check_env_ids(env_ids, self.envs.len())?;
-        check_batch("friction", friction, env_ids.len(), 1)?;
-        if let Some(f) = friction.iter().find(|f| **f < 0.0) {
-            return Err(PhysicsError::InvalidInput(format!(
-                "friction must be >= 0, got {f}"
-            )));
-        }
+        check_values("friction", friction, env_ids.len(), ">= 0", |f| f >= 0.0)?;
         for (&e, &f) in env_ids.iter().zip(friction) {
             let env = &mut self.envs[e];
             let handle = match body {

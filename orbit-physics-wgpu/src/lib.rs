@@ -17,7 +17,8 @@ use std::sync::Arc;
 use glam::{Quat, Vec3, Vec4};
 use orbit_core::physics::{
     ArticulationView, BackendRegistration, BodyRef, PhysicsBackend, PhysicsError, RigidObjectView,
-    SceneLayout, SimCfg, check_batch, check_env_ids,
+    SceneLayout, SimCfg, check_batch, check_dof_ids, check_env_ids, check_root_states,
+    check_values,
 };
 use orbit_core::scene::{RootState, SceneDesc};
 
@@ -193,7 +194,7 @@ impl WgpuBackend {
         backend.init_state(desc);
         backend.upload_state();
         // Mark every env fresh (nothing to warm-start from) and publish the initial state.
-        backend.refresh_all();
+        backend.refresh_all()?;
         Ok(backend)
     }
 
@@ -323,12 +324,11 @@ impl WgpuBackend {
     }
 
     /// Marks every env fresh and republishes (after construction).
-    fn refresh_all(&mut self) {
+    fn refresh_all(&mut self) -> Result<(), PhysicsError> {
         let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
         self.inputs[fresh..fresh + n].fill(1.0);
         self.inputs_dirty = true;
         self.dispatch(0)
-            .expect("the initial publish dispatch of a validated scene");
     }
 
     /// After a state write: drop warm starts of those envs and republish.
@@ -489,12 +489,7 @@ impl PhysicsBackend for WgpuBackend {
         dofs: &[usize],
         enabled: bool,
     ) -> Result<(), PhysicsError> {
-        let n = self.check_articulation(a)?.dofs;
-        if let Some(d) = dofs.iter().find(|&&d| d >= n) {
-            return Err(PhysicsError::InvalidInput(format!(
-                "bias compensation: dof {d} out of range ({n} dofs)"
-            )));
-        }
+        check_dof_ids(dofs, self.check_articulation(a)?.dofs)?;
         let first = self.scene.articulations[a].2;
         for &d in dofs {
             self.inputs[self.buffers.compensate + first + d] = if enabled { 1.0 } else { 0.0 };
@@ -531,32 +526,9 @@ impl PhysicsBackend for WgpuBackend {
         env_ids: &[usize],
         states: &[RootState],
     ) -> Result<(), PhysicsError> {
-        if o >= self.buffers.objects.len() {
-            return Err(PhysicsError::InvalidInput(format!(
-                "rigid object index {o} out of range ({} objects)",
-                self.buffers.objects.len()
-            )));
-        }
+        self.body_index(BodyRef::RigidObject(o))?;
         check_env_ids(env_ids, self.buffers.num_envs)?;
-        if states.len() != env_ids.len() {
-            return Err(PhysicsError::InvalidInput(format!(
-                "root states: expected {} states, got {}",
-                env_ids.len(),
-                states.len()
-            )));
-        }
-        let finite = |s: &RootState| {
-            s.pose.pos.is_finite()
-                && s.pose.rot.is_finite()
-                && s.pose.rot.length() > 1e-6
-                && s.lin_vel.is_finite()
-                && s.ang_vel.is_finite()
-        };
-        if let Some(bad) = states.iter().position(|s| !finite(s)) {
-            return Err(PhysicsError::InvalidInput(format!(
-                "root state {bad} is not finite or has a zero quaternion"
-            )));
-        }
+        check_root_states(states, env_ids.len())?;
         self.put_root_states(o, env_ids, states);
         self.after_write(env_ids)
     }
@@ -569,12 +541,7 @@ impl PhysicsBackend for WgpuBackend {
     ) -> Result<(), PhysicsError> {
         let b = self.body_index(body)?;
         check_env_ids(env_ids, self.buffers.num_envs)?;
-        check_batch("masses", masses, env_ids.len(), 1)?;
-        if let Some(m) = masses.iter().find(|m| **m <= 0.0) {
-            return Err(PhysicsError::InvalidInput(format!(
-                "masses must be > 0, got {m}"
-            )));
-        }
+        check_values("masses", masses, env_ids.len(), "> 0", |m| m > 0.0)?;
         let default = self.default_masses[b];
         if default <= 0.0 {
             return Err(PhysicsError::InvalidInput(format!(
@@ -598,12 +565,7 @@ impl PhysicsBackend for WgpuBackend {
     ) -> Result<(), PhysicsError> {
         let b = self.body_index(body)?;
         check_env_ids(env_ids, self.buffers.num_envs)?;
-        check_batch("friction", friction, env_ids.len(), 1)?;
-        if let Some(f) = friction.iter().find(|f| **f < 0.0) {
-            return Err(PhysicsError::InvalidInput(format!(
-                "friction must be >= 0, got {f}"
-            )));
-        }
+        check_values("friction", friction, env_ids.len(), ">= 0", |f| f >= 0.0)?;
         let shapes = self.scene.shapes.len();
         for (s, shape) in self.scene.shapes.iter().enumerate() {
             if shape.body == Some(b) {

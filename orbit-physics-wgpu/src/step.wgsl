@@ -575,10 +575,6 @@ fn closest_on(b: u32, bpos: vec3<f32>, brot: vec4<f32>, p: vec3<f32>) -> Closest
     return out;
 }
 
-fn body_code(s: u32) -> i32 {
-    return S_BODY[s];
-}
-
 // Friction of a contact between shapes a and b: the higher priority's, else the larger.
 fn pair_friction(a: u32, b: u32) -> f32 {
     let fa = friction(a);
@@ -601,7 +597,7 @@ fn test_point(p: vec3<f32>, r: f32, a: u32, b: u32, bpos: vec3<f32>, brot: vec4<
         return;
     }
     let pa = p - r * cl.normal;
-    add_contact(sep, cl.normal, 0.5 * (pa + cl.point), body_code(a), body_code(b), pair_friction(a, b), slot);
+    add_contact(sep, cl.normal, 0.5 * (pa + cl.point), S_BODY[a], S_BODY[b], pair_friction(a, b), slot);
 }
 
 fn add_contact(sep: f32, n: vec3<f32>, p: vec3<f32>, ba: i32, bb: i32, mu: f32, slot: u32) {
@@ -722,7 +718,7 @@ fn collide() {
                 if sep < MARGIN {
                     let pa = ca - sa.x * n;
                     let pb = cbp + bs.x * n;
-                    add_contact(sep, n, 0.5 * (pa + pb), body_code(a), body_code(b), pair_friction(a, b), slot);
+                    add_contact(sep, n, 0.5 * (pa + pb), S_BODY[a], S_BODY[b], pair_friction(a, b), slot);
                 }
             }
         } else if ka == 2u {

@@ -64,31 +64,11 @@ fn deterministic_runs() {
 /// MuJoCo agreement under Fancy Gym's torque law: every case within 0.005 rad joint RMS before
 /// the rod first pushes the box (the rapier backend's tolerance); the ProMP cases within
 /// 0.025 rad over the whole episode. That is looser than the rapier backend's 0.02 rad: this
-/// contact model measures 0.021 rad on both ProMP cases (docs/fidelity.md), and closing that
+/// contact model measures 0.022 / 0.021 rad on the ProMP cases (docs/fidelity.md); closing that
 /// gap is open work.
 #[test]
 fn franka_tracks_mujoco_rollouts() {
-    if !gpu_available() {
-        return;
-    }
-    for r in orbit_conformance::franka_mujoco_rollouts(BACKEND_NAME) {
-        println!(
-            "{}: joint RMS {:.4} rad, before contact {:.4} rad",
-            r.name, r.joint_rms, r.joint_rms_before_contact
-        );
-        assert!(
-            r.joint_rms_before_contact <= 0.005,
-            "{}: joint RMS before contact {} rad exceeds 0.005 rad",
-            r.name,
-            r.joint_rms_before_contact
-        );
-        if r.name.starts_with("promp") {
-            assert!(
-                r.joint_rms <= 0.025,
-                "{}: joint RMS {} rad exceeds 0.025 rad",
-                r.name,
-                r.joint_rms
-            );
-        }
+    if gpu_available() {
+        orbit_conformance::franka_tracks_mujoco_rollouts(BACKEND_NAME, 0.025);
     }
 }

@@ -302,6 +302,56 @@ pub fn check_batch(
     Ok(())
 }
 
+/// Checks a batch of per-env parameters (`count` finite values) obeys `rule` (e.g. masses
+/// `> 0`), naming the first value that does not.
+pub fn check_values(
+    what: &str,
+    values: &[f32],
+    count: usize,
+    rule: &str,
+    ok: impl Fn(f32) -> bool,
+) -> Result<(), PhysicsError> {
+    check_batch(what, values, count, 1)?;
+    match values.iter().find(|&&v| !ok(v)) {
+        Some(v) => Err(PhysicsError::InvalidInput(format!(
+            "{what} must be {rule}, got {v}"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Checks `count` root states (one per env id): finite, with unit quaternions.
+pub fn check_root_states(states: &[RootState], count: usize) -> Result<(), PhysicsError> {
+    if states.len() != count {
+        return Err(PhysicsError::InvalidInput(format!(
+            "root states: expected {count} states (one per env id), got {}",
+            states.len()
+        )));
+    }
+    for s in states {
+        let finite = s.pose.pos.is_finite()
+            && s.pose.rot.is_finite()
+            && s.lin_vel.is_finite()
+            && s.ang_vel.is_finite();
+        if !finite || (s.pose.rot.length() - 1.0).abs() > 1e-3 {
+            return Err(PhysicsError::InvalidInput(format!(
+                "root state {s:?} must be finite with a unit quaternion"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Checks dof indices of an articulation with `num_dofs` dofs are in range.
+pub fn check_dof_ids(dofs: &[usize], num_dofs: usize) -> Result<(), PhysicsError> {
+    match dofs.iter().find(|&&d| d >= num_dofs) {
+        Some(d) => Err(PhysicsError::InvalidInput(format!(
+            "dof {d} is out of range ({num_dofs} dofs)"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Checks env ids are in range and unique.
 pub fn check_env_ids(env_ids: &[usize], num_envs: usize) -> Result<(), PhysicsError> {
     let mut seen = vec![false; num_envs];

@@ -5,10 +5,8 @@ use orbit_managers::{EnvError, ManagerBasedRlEnv, make};
 use orbit_physics_rapier as _;
 use orbit_task_box_pushing as _;
 
-const TASK: &str = "BoxPushing-Torque-Franka-v0";
-
-/// Fancy Gym's seed-0 target (spec §5.5).
-const SEED0_TARGET: &str = "commands.target.params.fixed=Some([0.4910885062, -0.2071919576, -0.01, 0.0518997707, 0.0, 0.0, 0.9986522988])";
+mod common;
+use common::{TASK, seed0_target_override};
 
 fn env(num_envs: usize, extra: &[&str]) -> ManagerBasedRlEnv {
     let mut overrides = vec![format!("num_envs={num_envs}")];
@@ -21,7 +19,7 @@ fn env(num_envs: usize, extra: &[&str]) -> ManagerBasedRlEnv {
 /// exactly step 100 and the observation returned then belongs to the new episode.
 #[test]
 fn zero_action_dense_return_matches_fancy_gym() {
-    let mut env = env(1, &[SEED0_TARGET]);
+    let mut env = env(1, &[&seed0_target_override()]);
     env.reset().unwrap();
     let zero = vec![0.0; env.action_dim()];
     let mut ret = 0.0f64;
@@ -153,7 +151,7 @@ fn config_errors_name_file_and_field() {
 /// Observation layout: joint pos/vel (7 + 7), box pose (3 + 4), target (7), last action (7).
 #[test]
 fn observation_layout() {
-    let mut env = env(1, &[SEED0_TARGET]);
+    let mut env = env(1, &[&seed0_target_override()]);
     env.reset().unwrap();
     let (obs, d) = env.observation("policy").unwrap();
     assert_eq!(d, 35);
@@ -261,7 +259,7 @@ fn every_registered_task_runs_an_episode() {
 fn temporal_sparse_pays_at_the_last_step() {
     let mut env = make(
         "BoxPushing-Torque-TemporalSparse-Franka-v0",
-        &["num_envs=1".into(), SEED0_TARGET.into()],
+        &["num_envs=1".into(), seed0_target_override()],
     )
     .unwrap();
     env.reset().unwrap();
@@ -405,7 +403,7 @@ fn observation_history_shifts_and_refills_on_reset() {
 fn curriculum_changes_a_reward_weight() {
     let cur = "curriculum.energy_up=(func: \"modify_reward_weight\", params: (term_name: \"energy\", weight: -5.0, num_steps: 3))";
     let zero = "rewards.energy.weight=0.0";
-    let mut env = env(1, &[cur, zero, SEED0_TARGET]);
+    let mut env = env(1, &[cur, zero, &seed0_target_override()]);
     env.reset().unwrap();
     let act = vec![0.5f32; env.action_dim()];
     let mut rewards = Vec::new();

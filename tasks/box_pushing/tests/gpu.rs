@@ -8,8 +8,8 @@ use orbit_physics_rapier as _;
 use orbit_physics_wgpu::gpu_available_for_tests;
 use orbit_task_box_pushing as _;
 
-const TASK: &str = "BoxPushing-Torque-Franka-v0";
-const SEED0_TARGET: &str = "commands.target.params.fixed=Some([0.4910885062, -0.2071919576, -0.01, 0.0518997707, 0.0, 0.0, 0.9986522988])";
+mod common;
+use common::{TASK, seed0_target_override};
 
 /// Zero action from the default reset and the seed-0 target: Fancy Gym's Dense return is
 /// −194.5184 (MuJoCo); the GPU backend must agree within 1 %, like the CPU backend.
@@ -18,7 +18,11 @@ fn zero_action_dense_return_on_the_gpu() {
     if !gpu_available_for_tests() {
         return;
     }
-    let overrides = ["num_envs=2", "sim.backend=\"wgpu\"", SEED0_TARGET].map(String::from);
+    let overrides = [
+        "num_envs=2".to_string(),
+        "sim.backend=\"wgpu\"".to_string(),
+        seed0_target_override(),
+    ];
     let mut env = make(TASK, &overrides).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(env.scene().backend.name(), "wgpu");
     env.reset().unwrap();

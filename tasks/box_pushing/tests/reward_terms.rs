@@ -8,24 +8,13 @@ use orbit_managers::{ManagerBasedRlEnv, make};
 use orbit_physics_rapier as _;
 use orbit_task_box_pushing as _;
 
-/// Seed 0's target: position and `(w, x, y, z)` orientation (a yaw of ≈ 3.0377 rad).
-const TARGET: [f32; 7] = [
-    0.4910885,
-    -0.20719196,
-    -0.01,
-    0.05189977,
-    0.0,
-    0.0,
-    0.9986523,
-];
+mod common;
+use common::{SEED0_TARGET, TASK, seed0_target_override};
 
 /// The torque task with the target fixed and every term under test added (at weight 0, so the
 /// task's reward is unchanged; `evaluate_reward_terms` reports the unweighted values).
 fn env() -> ManagerBasedRlEnv {
-    let target = format!(
-        "commands.target.params.fixed=Some([{}])",
-        TARGET.map(|v| v.to_string()).join(", ")
-    );
+    let target = seed0_target_override();
     let overrides = [
         "num_envs=1",
         &target,
@@ -37,7 +26,7 @@ fn env() -> ManagerBasedRlEnv {
         "rewards.action_rate=(func: \"action_rate_l2\", weight: 0.0)",
     ];
     let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    let mut env = make("BoxPushing-Torque-Franka-v0", &overrides).unwrap_or_else(|e| panic!("{e}"));
+    let mut env = make(TASK, &overrides).unwrap_or_else(|e| panic!("{e}"));
     env.reset().unwrap();
     env
 }
@@ -58,8 +47,13 @@ fn close(name: &str, got: f32, expected: f32, tol: f32) {
 
 fn target_pose() -> Pose {
     Pose::new(
-        Vec3::new(TARGET[0], TARGET[1], TARGET[2]),
-        quat_wxyz([TARGET[3], TARGET[4], TARGET[5], TARGET[6]]),
+        Vec3::new(SEED0_TARGET[0], SEED0_TARGET[1], SEED0_TARGET[2]),
+        quat_wxyz([
+            SEED0_TARGET[3],
+            SEED0_TARGET[4],
+            SEED0_TARGET[5],
+            SEED0_TARGET[6],
+        ]),
     )
 }
 
