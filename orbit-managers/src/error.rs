@@ -35,6 +35,9 @@ pub enum EnvError {
         /// What is wrong and what is expected.
         message: String,
     },
+    /// A state write (episode counters, …) with values the env cannot take.
+    #[error("invalid state: {0}")]
+    InvalidState(String),
     /// An action batch of the wrong shape or with non-finite values.
     #[error("invalid action: {0}")]
     InvalidAction(String),

@@ -23,4 +23,4 @@ pub use base_env::{EnvRngs, EnvView, ManagerBasedEnv, StepTimings};
 pub use error::EnvError;
 pub use rl_env::{Extras, ManagerBasedRlEnv, StepResult};
 pub use scene::Scene;
-pub use task::{TaskDef, make, tasks};
+pub use task::{AgentCfgDef, TaskDef, agent_cfg, make, tasks};

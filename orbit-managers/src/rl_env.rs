@@ -137,6 +137,21 @@ impl ManagerBasedRlEnv {
         &self.base.episode_length
     }
 
+    /// Sets the step counters of the running episodes, e.g. to random values so that
+    /// time-outs spread out (RSL-RL's `init_at_random_ep_len`). Every value must be below
+    /// [`max_episode_length`](Self::max_episode_length); on error nothing changes.
+    pub fn set_episode_length(&mut self, lengths: &[u32]) -> Result<(), EnvError> {
+        let max = self.base.max_episode_length;
+        if lengths.len() != self.num_envs() || lengths.iter().any(|&l| l >= max) {
+            return Err(EnvError::InvalidState(format!(
+                "episode lengths: expected {} values below the maximum episode length {max}",
+                self.num_envs()
+            )));
+        }
+        self.base.episode_length.copy_from_slice(lengths);
+        Ok(())
+    }
+
     /// The observation group `name`: `(values num_envs × dim, dim)`.
     pub fn observation(&self, name: &str) -> Option<(&[f32], usize)> {
         self.base.observation(name)

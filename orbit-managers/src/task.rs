@@ -20,6 +20,29 @@ pub struct TaskDef {
 
 inventory::collect!(TaskDef);
 
+/// A training config of a registered task for one learning library (Isaac Lab's
+/// `rsl_rl_cfg_entry_point`): `inventory::submit! { AgentCfgDef { task, library, file_name,
+/// config } }`.
+pub struct AgentCfgDef {
+    /// Task id the config trains.
+    pub task: &'static str,
+    /// Learning library / workflow, e.g. `"rsl_rl"` (step-based PPO).
+    pub library: &'static str,
+    /// File name used in error messages.
+    pub file_name: &'static str,
+    /// The config (RON text).
+    pub config: &'static str,
+}
+
+inventory::collect!(AgentCfgDef);
+
+/// The training config registered for `task` and `library`, if any.
+pub fn agent_cfg(task: &str, library: &str) -> Option<&'static AgentCfgDef> {
+    inventory::iter::<AgentCfgDef>
+        .into_iter()
+        .find(|a| a.task == task && a.library == library)
+}
+
 /// All registered tasks, sorted by id.
 pub fn tasks() -> Vec<&'static TaskDef> {
     let mut v: Vec<&TaskDef> = inventory::iter::<TaskDef>.into_iter().collect();

@@ -2,6 +2,7 @@
 //! kind of term, and the entity selections they share.
 
 mod actions;
+mod commands;
 mod curriculum;
 mod events;
 mod observations;
@@ -9,6 +10,7 @@ mod rewards;
 mod terminations;
 
 pub use actions::*;
+pub use commands::*;
 pub use curriculum::*;
 pub use events::*;
 pub use observations::*;

@@ -1,0 +1,152 @@
+//! Built-in command terms.
+
+use glam::{EulerRot, Quat, Vec3};
+use orbit_core::math::{Pose, quat_wxyz, rotation_distance, to_wxyz};
+use serde::Deserialize;
+
+use crate::base_env::EnvRngs;
+use crate::error::EnvError;
+use crate::scene::Scene;
+use crate::term::*;
+
+/// Parameters of `uniform_pose` (Isaac Lab's `UniformPoseCommandCfg`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UniformPoseParams {
+    /// The articulation whose frame the command is for.
+    #[serde(default = "super::robot")]
+    pub asset: String,
+    /// The link or frame that should reach the pose (e.g. `tcp`).
+    pub body_name: String,
+    /// Sampling ranges, in the articulation's root frame.
+    pub ranges: PoseRanges,
+    /// Flip quaternions to `w ≥ 0` (Isaac Lab's `make_quat_unique`).
+    #[serde(default)]
+    pub make_quat_unique: bool,
+}
+
+impl Default for UniformPoseParams {
+    fn default() -> Self {
+        Self {
+            asset: super::robot(),
+            body_name: String::new(),
+            ranges: PoseRanges::default(),
+            make_quat_unique: false,
+        }
+    }
+}
+
+/// Uniform ranges `(low, high)` of a pose: position (m) and extrinsic x-y-z Euler angles (rad).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoseRanges {
+    /// x range.
+    pub pos_x: (f32, f32),
+    /// y range.
+    pub pos_y: (f32, f32),
+    /// z range.
+    pub pos_z: (f32, f32),
+    /// Rotation about x.
+    pub roll: (f32, f32),
+    /// Rotation about y.
+    pub pitch: (f32, f32),
+    /// Rotation about z.
+    pub yaw: (f32, f32),
+}
+
+/// A target pose of a body in the articulation's root frame: position uniform in a box, then
+/// `q = R_z(yaw)·R_y(pitch)·R_x(roll)` with uniform angles. Command `(x, y, z, qw, qx, qy, qz)`.
+struct UniformPose {
+    robot: usize,
+    frame: (usize, Pose),
+    p: UniformPoseParams,
+    command: Vec<f32>,
+    /// `position_error` (m) and `orientation_error` (rad) of the body against the command.
+    metrics: [(&'static str, Vec<f32>); 2],
+}
+
+/// The command of env `e` as a world (env-frame) pose, given the articulation's root pose.
+pub fn command_pose_in_world(root: &Pose, command: &[f32]) -> Pose {
+    let local = Pose::new(
+        Vec3::new(command[0], command[1], command[2]),
+        quat_wxyz([command[3], command[4], command[5], command[6]]),
+    );
+    root.mul_pose(&local)
+}
+
+impl CommandTerm for UniformPose {
+    fn dim(&self) -> usize {
+        7
+    }
+
+    fn command(&self) -> &[f32] {
+        &self.command
+    }
+
+    fn update_metrics(&mut self, scene: &Scene) {
+        let a = scene.backend.articulation(self.robot);
+        for e in 0..scene.num_envs() {
+            let target =
+                command_pose_in_world(&a.link_pose(e, 0), &self.command[e * 7..(e + 1) * 7]);
+            let body = a.frame_pose(e, self.frame.0, &self.frame.1);
+            self.metrics[0].1[e] = (body.pos - target.pos).length();
+            self.metrics[1].1[e] = rotation_distance(body.rot, target.rot);
+        }
+    }
+
+    fn metrics(&self) -> &[(&'static str, Vec<f32>)] {
+        &self.metrics
+    }
+
+    fn resample(&mut self, _scene: &Scene, env_ids: &[usize], rng: &mut EnvRngs) {
+        let r = &self.p.ranges;
+        for &e in env_ids {
+            let g = rng.get(e);
+            let mut draw = |(lo, hi): (f32, f32)| g.uniform_range(lo, hi);
+            let pos = [draw(r.pos_x), draw(r.pos_y), draw(r.pos_z)];
+            let (roll, pitch, yaw) = (draw(r.roll), draw(r.pitch), draw(r.yaw));
+            let mut q = Quat::from_euler(EulerRot::ZYX, yaw, pitch, roll);
+            if self.p.make_quat_unique && q.w < 0.0 {
+                q = -q;
+            }
+            let row = &mut self.command[e * 7..(e + 1) * 7];
+            row[..3].copy_from_slice(&pos);
+            row[3..].copy_from_slice(&to_wxyz(q));
+        }
+    }
+}
+
+fn build_uniform_pose(ctx: &TermContext<'_>) -> Result<Box<dyn CommandTerm>, EnvError> {
+    let p: UniformPoseParams = ctx.params()?;
+    let f = |s: &str| format!("{}.params.{s}", ctx.field);
+    let robot = ctx.scene.articulation(&f("asset"), &p.asset)?;
+    let frame = ctx.scene.frame(&f("body_name"), robot, &p.body_name)?;
+    let r = &p.ranges;
+    for (name, (lo, hi)) in [
+        ("pos_x", r.pos_x),
+        ("pos_y", r.pos_y),
+        ("pos_z", r.pos_z),
+        ("roll", r.roll),
+        ("pitch", r.pitch),
+        ("yaw", r.yaw),
+    ] {
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return Err(ctx.error(format!(
+                "params.ranges.{name}: expected finite (low, high) with low <= high, got ({lo}, {hi})"
+            )));
+        }
+    }
+    let n = ctx.scene.num_envs();
+    Ok(Box::new(UniformPose {
+        robot,
+        frame,
+        p,
+        command: vec![0.0; n * 7],
+        metrics: [
+            ("position_error", vec![0.0; n]),
+            ("orientation_error", vec![0.0; n]),
+        ],
+    }))
+}
+
+inventory::submit! { CommandTermDef { name: "uniform_pose", build: build_uniform_pose } }
