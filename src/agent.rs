@@ -10,15 +10,9 @@ pub struct AgentArgs {
     /// Task id (see the `list_tasks` example).
     #[arg(long, default_value = "BoxPushing-Torque-Franka-v0")]
     pub task: String,
-    /// Number of envs.
-    #[arg(long)]
-    pub num_envs: Option<usize>,
-    /// Seed.
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// Physics backend.
-    #[arg(long)]
-    pub backend: Option<String>,
+    /// Envs, seed, backend.
+    #[command(flatten)]
+    pub env: crate::EnvArgs,
     /// Env steps to run.
     #[arg(long, default_value_t = 200)]
     pub steps: usize,
@@ -30,16 +24,12 @@ pub struct AgentArgs {
 /// Runs the task with uniform random actions in `[-1, 1]` (or zeros) and prints episode logs
 /// and throughput.
 pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error>> {
-    let overrides = crate::run_overrides(
-        args.num_envs,
-        args.seed,
-        args.backend.as_deref(),
-        &args.overrides,
-    );
+    let e = &args.env;
+    let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &args.overrides);
     let mut env = crate::make(&args.task, &overrides)?;
     env.reset()?;
     let (n, d) = (env.num_envs(), env.action_dim());
-    let mut rng = EnvRng::new(args.seed.unwrap_or(0), 0, streams::POLICY);
+    let mut rng = EnvRng::new(e.seed.unwrap_or(0), 0, streams::POLICY);
     let mut action = vec![0.0f32; n * d];
     let start = std::time::Instant::now();
     let mut mean_reward = 0.0f64;

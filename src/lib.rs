@@ -9,7 +9,9 @@ pub use orbit_core as core;
 pub use orbit_managers as managers;
 pub use orbit_physics_rapier as physics_rapier;
 pub use orbit_physics_wgpu as physics_wgpu;
+pub use orbit_rl as rl;
 pub use orbit_task_box_pushing as task_box_pushing;
+pub use orbit_task_reach as task_reach;
 
 /// Builds a registered task (`BoxPushing-Torque-Franka-v0`, …) with config overrides; linking
 /// this crate registers every built-in backend and task.
@@ -17,13 +19,32 @@ pub fn make(
     task: &str,
     overrides: &[String],
 ) -> Result<managers::ManagerBasedRlEnv, managers::EnvError> {
-    // Reference the backend and task crates so their registrations are linked in.
+    link_registrations();
+    managers::make(task, overrides)
+}
+
+/// References the backend and task crates so their `inventory` registrations are linked in.
+pub fn link_registrations() {
     let _ = (
         physics_rapier::BACKEND_NAME,
         physics_wgpu::BACKEND_NAME,
         task_box_pushing::SUCCESS_DISTANCE,
+        task_reach::TASK_ID,
     );
-    managers::make(task, overrides)
+}
+
+/// The env flags every example shares (Isaac Lab's names).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct EnvArgs {
+    /// Number of envs (default: the config's).
+    #[arg(long)]
+    pub num_envs: Option<usize>,
+    /// Seed (default: the config's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Physics backend (`rapier` on the CPU, `wgpu` on the GPU).
+    #[arg(long)]
+    pub backend: Option<String>,
 }
 
 /// Common command-line flags of the examples (Isaac Lab's names), turned into overrides.
@@ -48,3 +69,4 @@ pub fn run_overrides(
 }
 
 pub mod agent;
+pub mod train;

@@ -119,3 +119,33 @@ inventory::submit! {
         overrides: JOINT_POS,
     }
 }
+
+/// The step-based PPO settings of the Orbit port (spec §8; `config/box_pushing_ppo.ron`).
+const PPO: &str = include_str!("../config/box_pushing_ppo.ron");
+
+inventory::submit! {
+    orbit_managers::AgentCfgDef {
+        task: "BoxPushing-JointPos-Franka-v0",
+        library: "rsl_rl",
+        file_name: "box_pushing_ppo.ron (bundled)",
+        config: PPO,
+    }
+}
+
+inventory::submit! {
+    orbit_managers::AgentCfgDef {
+        task: "BoxPushing-TaskSpace-Franka-v0",
+        library: "rsl_rl",
+        file_name: "box_pushing_ppo.ron (bundled)",
+        config: PPO,
+    }
+}
+
+inventory::submit! {
+    orbit_managers::AgentCfgDef {
+        task: "BoxPushing-Torque-Franka-v0",
+        library: "rsl_rl",
+        file_name: "box_pushing_ppo.ron (bundled)",
+        config: PPO,
+    }
+}

@@ -1,0 +1,21 @@
+//! Trains a registered task with PPO (Isaac Lab's `rsl_rl/train.py`):
+//!
+//! ```text
+//! cargo run --release --example train                                   # box pushing, CPU
+//! cargo run --release --example train -- --task Reach-Franka-v0 --num-envs 256 --max-iterations 100
+//! cargo run --release --example train -- --backend wgpu --num-envs 4096  # on a GPU
+//! cargo run --release --example train -- --resume agent.max_iterations=500
+//! ```
+//!
+//! Writes `logs/<experiment>/<timestamp>/`: resolved configs (`params/`), checkpoints
+//! (`model_<it>.*`), `scalars.csv` and `training_curves.png`.
+
+use clap::Parser;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .init();
+    orbit::train::train(&orbit::train::TrainArgs::parse(), true)?;
+    Ok(())
+}

@@ -1,0 +1,217 @@
+//! Runner, policy and PPO configs (RSL-RL's `RslRlOnPolicyRunnerCfg`, `RslRlPpoActorCriticCfg`
+//! and `RslRlPpoAlgorithmCfg`), loaded from RON files that live beside each task.
+
+use serde::{Deserialize, Serialize};
+
+/// The on-policy runner's config (one RON file per task and workflow).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RunnerCfg {
+    /// Seed of the learner (network initialisation, action noise, minibatch shuffles) and, as
+    /// in Isaac Lab's training script, of the env.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Env steps per env collected per iteration.
+    pub num_steps_per_env: usize,
+    /// Iterations of `learn`.
+    pub max_iterations: usize,
+    /// A checkpoint every this many iterations (and one after the last).
+    #[serde(default = "default_save_interval")]
+    pub save_interval: usize,
+    /// Name of the directory under `logs/` holding this experiment's runs.
+    pub experiment_name: String,
+    /// Suffix of the run directory name (`<timestamp>_<run_name>`), empty for none.
+    #[serde(default)]
+    pub run_name: String,
+    /// Normalise observations with running statistics (RSL-RL's `EmpiricalNormalization`).
+    #[serde(default)]
+    pub empirical_normalization: bool,
+    /// Start every env at a random point of its episode, so time-outs are spread out.
+    #[serde(default = "default_true")]
+    pub init_at_random_ep_len: bool,
+    /// The `extras.log` key whose per-iteration mean is reported as the success rate (e.g.
+    /// `Metrics/target/success`), if the task has one.
+    #[serde(default)]
+    pub success_metric: Option<String>,
+    /// Overrides applied to the env config before it is built (`key.path=value`), e.g. the
+    /// number of envs the published settings use.
+    #[serde(default)]
+    pub env_overrides: Vec<String>,
+    /// The actor-critic network.
+    pub policy: PolicyCfg,
+    /// The PPO algorithm.
+    pub algorithm: PpoCfg,
+}
+
+/// Actor-critic network config (RSL-RL's `ActorCritic`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PolicyCfg {
+    /// Initial standard deviation of the Gaussian action noise.
+    pub init_noise_std: f32,
+    /// Hidden layer widths of the actor.
+    pub actor_hidden_dims: Vec<usize>,
+    /// Hidden layer widths of the critic.
+    pub critic_hidden_dims: Vec<usize>,
+    /// Activation between hidden layers.
+    pub activation: Activation,
+    /// How the noise parameter is stored: the standard deviation itself (RSL-RL's default) or
+    /// its logarithm.
+    #[serde(default)]
+    pub noise_std_type: NoiseStdType,
+}
+
+/// Activation functions RSL-RL offers.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub enum Activation {
+    /// `x` if `x > 0`, else `exp(x) − 1`.
+    Elu,
+    /// Scaled ELU.
+    Selu,
+    /// `max(x, 0)`.
+    Relu,
+    /// Leaky ReLU with slope 0.01.
+    Lrelu,
+    /// Hyperbolic tangent.
+    Tanh,
+    /// Logistic sigmoid.
+    Sigmoid,
+}
+
+/// Parameterisation of the state-independent action noise.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+pub enum NoiseStdType {
+    /// The parameter is the standard deviation (`std`).
+    #[default]
+    Scalar,
+    /// The parameter is its logarithm (`log_std`).
+    Log,
+}
+
+/// PPO config (RSL-RL's `PPO` constructor arguments).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PpoCfg {
+    /// Weight of the value loss.
+    pub value_loss_coef: f32,
+    /// Clip the value loss around the old values with `clip_param`.
+    pub use_clipped_value_loss: bool,
+    /// ε of the clipped surrogate (and of the value clipping).
+    pub clip_param: f32,
+    /// Weight of the entropy bonus.
+    pub entropy_coef: f32,
+    /// Passes over the rollout per iteration.
+    pub num_learning_epochs: usize,
+    /// Minibatches per pass.
+    pub num_mini_batches: usize,
+    /// Initial Adam learning rate.
+    pub learning_rate: f64,
+    /// `Fixed` learning rate or `Adaptive` (KL-driven).
+    pub schedule: Schedule,
+    /// Discount factor.
+    pub gamma: f32,
+    /// GAE λ.
+    pub lam: f32,
+    /// Target KL divergence of the adaptive schedule.
+    pub desired_kl: f32,
+    /// Global gradient-norm clip.
+    pub max_grad_norm: f32,
+    /// Normalise advantages per minibatch instead of over the whole rollout.
+    #[serde(default)]
+    pub normalize_advantage_per_mini_batch: bool,
+}
+
+/// Learning-rate schedule.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub enum Schedule {
+    /// Keep the configured rate.
+    Fixed,
+    /// Divide by 1.5 when the KL exceeds 2·desired, multiply by 1.5 below desired/2, clamped to
+    /// [1e-5, 1e-2].
+    Adaptive,
+}
+
+fn default_seed() -> u64 {
+    42
+}
+
+fn default_save_interval() -> usize {
+    50
+}
+
+fn default_true() -> bool {
+    true
+}
+
+impl RunnerCfg {
+    /// Loads a runner config from RON text (`file_name` is used in errors) with overrides.
+    pub fn from_ron(
+        text: &str,
+        file_name: &str,
+        overrides: &[String],
+    ) -> Result<Self, crate::RlError> {
+        let cfg: RunnerCfg = orbit_core::config::from_str(text, file_name, overrides)?;
+        cfg.validate(file_name)?;
+        Ok(cfg)
+    }
+
+    /// Checks the values serde cannot (positive sizes, probabilities in range).
+    pub fn validate(&self, file_name: &str) -> Result<(), crate::RlError> {
+        let bad = |field: &str, message: String| {
+            Err(crate::RlError::InvalidConfig {
+                file: file_name.to_string(),
+                field: field.to_string(),
+                message,
+            })
+        };
+        let a = &self.algorithm;
+        if self.num_steps_per_env == 0 {
+            return bad("num_steps_per_env", "must be at least 1".into());
+        }
+        if a.num_mini_batches == 0 || a.num_learning_epochs == 0 {
+            return bad(
+                "algorithm.num_mini_batches",
+                "epochs and minibatches must be at least 1".into(),
+            );
+        }
+        let positive = |x: f32| x > 0.0 && x.is_finite();
+        if !(positive(a.gamma) && a.gamma <= 1.0 && (0.0..=1.0).contains(&a.lam)) {
+            return bad(
+                "algorithm.gamma",
+                format!(
+                    "γ must be in (0, 1] and λ in [0, 1], got {} and {}",
+                    a.gamma, a.lam
+                ),
+            );
+        }
+        if !(a.learning_rate > 0.0 && a.learning_rate.is_finite()) {
+            return bad(
+                "algorithm.learning_rate",
+                format!("must be positive, got {}", a.learning_rate),
+            );
+        }
+        if ![a.clip_param, a.max_grad_norm, a.desired_kl]
+            .into_iter()
+            .all(positive)
+        {
+            return bad(
+                "algorithm.clip_param",
+                "clip_param, max_grad_norm and desired_kl must be positive".into(),
+            );
+        }
+        if !positive(self.policy.init_noise_std) {
+            return bad(
+                "policy.init_noise_std",
+                format!("must be positive, got {}", self.policy.init_noise_std),
+            );
+        }
+        if self.policy.actor_hidden_dims.contains(&0) || self.policy.critic_hidden_dims.contains(&0)
+        {
+            return bad(
+                "policy.actor_hidden_dims",
+                "layer widths must be at least 1".into(),
+            );
+        }
+        Ok(())
+    }
+}

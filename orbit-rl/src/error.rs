@@ -1,0 +1,62 @@
+//! Errors of the learners and the runner.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while training or replaying a policy.
+#[derive(Debug, thiserror::Error)]
+pub enum RlError {
+    /// A runner config could not be parsed (the message names file, line and field).
+    #[error(transparent)]
+    Config(#[from] orbit_core::config::ConfigError),
+    /// The environment failed (bad env config, invalid actions, backend errors).
+    #[error(transparent)]
+    Env(#[from] orbit_managers::EnvError),
+    /// A runner config parsed but holds a value the learner cannot use.
+    #[error("{file}: field `{field}`: {message}")]
+    InvalidConfig {
+        /// Config file name.
+        file: String,
+        /// Field path.
+        field: String,
+        /// What is wrong and what is expected.
+        message: String,
+    },
+    /// The env does not fit the learner (missing observation group, sizes that disagree).
+    #[error("environment: {0}")]
+    EnvMismatch(String),
+    /// Reading or writing a run directory failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// A checkpoint is missing, unreadable or does not match the network.
+    #[error("checkpoint {path}: {message}")]
+    Checkpoint {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// Drawing the training curves failed.
+    #[error("{path}: plotting failed: {message}")]
+    Plot {
+        /// The image file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// Training produced a non-finite number (the loss or the policy's output).
+    #[error("training diverged: {0} is not finite; lower the learning rate or check the rewards")]
+    NonFinite(&'static str),
+}
+
+impl RlError {
+    /// Wraps an I/O error with the path it concerns.
+    pub fn io(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> Self {
+        let path = path.into();
+        move |source| RlError::Io { path, source }
+    }
+}

@@ -1,0 +1,42 @@
+//! Learners for orbit-rs: PPO with RSL-RL's semantics on burn, its rollout storage and
+//! observation normalisation, the on-policy runner with checkpoints and logs, and the
+//! inference [`Policy`].
+//!
+//! ```text
+//! VecEnv (RlVecEnv over a ManagerBasedRlEnv)
+//!   └─ OnPolicyRunner::learn: act → env.step → process_env_step (× num_steps_per_env)
+//!                             → compute_returns (GAE) → update (PPO epochs × minibatches)
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod cfg;
+mod error;
+pub mod logger;
+pub mod model;
+pub mod normalizer;
+pub mod plot;
+pub mod ppo;
+mod progress;
+pub mod run_dir;
+pub mod runner;
+pub mod storage;
+pub mod vec_env;
+
+pub use burn;
+pub use cfg::RunnerCfg;
+pub use error::RlError;
+pub use runner::{IterationLog, OnPolicyRunner, Policy};
+pub use vec_env::{RlVecEnv, VecEnv, VecEnvStep};
+
+/// Random streams of the learner (`EnvRng` stream ids; the env's own are 1–6).
+pub mod streams {
+    /// Network initialisation.
+    pub const INIT: u32 = 16;
+    /// Action noise, one stream per env.
+    pub const ACTION_NOISE: u32 = 17;
+    /// Minibatch shuffles, one stream per update.
+    pub const SHUFFLE: u32 = 18;
+    /// Random initial episode lengths, one stream per env.
+    pub const EPISODE_LENGTH: u32 = 19;
+}

@@ -1,0 +1,141 @@
+//! The actor-critic network (RSL-RL's `ActorCritic`): two MLPs and a state-independent
+//! Gaussian noise parameter.
+
+use burn::module::{Module, Param};
+use burn::nn::Linear;
+use burn::tensor::{Device, Tensor, TensorData, activation};
+use orbit_core::rng::EnvRng;
+
+use crate::cfg::{Activation, NoiseStdType, PolicyCfg};
+
+/// A multi-layer perceptron: `Linear, act, Linear, act, …, Linear` (no output activation).
+#[derive(Module, Debug)]
+pub struct Mlp {
+    layers: Vec<Linear>,
+    #[module(skip)]
+    activation: Activation,
+}
+
+/// A linear layer initialised as PyTorch does (`U(−k, k)` for weights and biases,
+/// `k = 1/√fan_in`), drawn from a counter-based stream so it is the same on every device.
+fn linear(d_in: usize, d_out: usize, rng: &mut EnvRng, device: &Device) -> Linear {
+    let k = 1.0 / (d_in as f32).sqrt();
+    let mut draw = |n: usize| -> Vec<f32> { (0..n).map(|_| rng.uniform_range(-k, k)).collect() };
+    // burn stores weights as [d_in, d_out].
+    let weight = TensorData::new(draw(d_in * d_out), [d_in, d_out]);
+    let bias = TensorData::new(draw(d_out), [d_out]);
+    Linear {
+        weight: Param::from_tensor(Tensor::from_data(weight, device)),
+        bias: Some(Param::from_tensor(Tensor::from_data(bias, device))),
+    }
+}
+
+impl Mlp {
+    /// An MLP with layer widths `dims` (`[input, hidden…, output]`).
+    pub fn new(dims: &[usize], activation: Activation, rng: &mut EnvRng, device: &Device) -> Self {
+        let layers = dims
+            .windows(2)
+            .map(|w| linear(w[0], w[1], rng, device))
+            .collect();
+        Self { layers, activation }
+    }
+
+    /// Applies the network to a batch of rows.
+    pub fn forward(&self, mut x: Tensor<2>) -> Tensor<2> {
+        let last = self.layers.len() - 1;
+        for (i, layer) in self.layers.iter().enumerate() {
+            x = layer.forward(x);
+            if i < last {
+                x = match self.activation {
+                    Activation::Elu => activation::elu(x, 1.0),
+                    Activation::Selu => activation::selu(x),
+                    Activation::Relu => activation::relu(x),
+                    Activation::Lrelu => activation::leaky_relu(x, 0.01),
+                    Activation::Tanh => activation::tanh(x),
+                    Activation::Sigmoid => activation::sigmoid(x),
+                };
+            }
+        }
+        x
+    }
+}
+
+/// Actor (Gaussian mean), critic (value) and the per-action noise parameter.
+#[derive(Module, Debug)]
+pub struct ActorCritic {
+    /// Observations → action means (no squashing).
+    pub actor: Mlp,
+    /// Critic observations → value.
+    pub critic: Mlp,
+    /// The noise parameter: the standard deviation, or its log (see [`NoiseStdType`]).
+    pub std: Param<Tensor<1>>,
+    #[module(skip)]
+    noise_std_type: NoiseStdType,
+}
+
+impl ActorCritic {
+    /// Builds the network for `num_obs` actor inputs, `num_critic_obs` critic inputs and
+    /// `num_actions` outputs; weights are drawn from `seed`'s stream.
+    pub fn new(
+        cfg: &PolicyCfg,
+        num_obs: usize,
+        num_critic_obs: usize,
+        num_actions: usize,
+        seed: u64,
+        device: &Device,
+    ) -> Self {
+        let mut rng = EnvRng::new(seed, 0, crate::streams::INIT);
+        let dims = |input: usize, hidden: &[usize], output: usize| {
+            std::iter::once(input)
+                .chain(hidden.iter().copied())
+                .chain(std::iter::once(output))
+                .collect::<Vec<_>>()
+        };
+        let actor = Mlp::new(
+            &dims(num_obs, &cfg.actor_hidden_dims, num_actions),
+            cfg.activation,
+            &mut rng,
+            device,
+        );
+        let critic = Mlp::new(
+            &dims(num_critic_obs, &cfg.critic_hidden_dims, 1),
+            cfg.activation,
+            &mut rng,
+            device,
+        );
+        let init = match cfg.noise_std_type {
+            NoiseStdType::Scalar => cfg.init_noise_std,
+            NoiseStdType::Log => cfg.init_noise_std.ln(),
+        };
+        let std = Tensor::from_data(
+            TensorData::new(vec![init; num_actions], [num_actions]),
+            device,
+        );
+        Self {
+            actor,
+            critic,
+            std: Param::from_tensor(std),
+            noise_std_type: cfg.noise_std_type,
+        }
+    }
+
+    /// Action means for a batch of observations, `[rows, num_actions]`.
+    pub fn action_mean(&self, obs: Tensor<2>) -> Tensor<2> {
+        self.actor.forward(obs)
+    }
+
+    /// Values for a batch of critic observations, `[rows, 1]`.
+    pub fn value(&self, critic_obs: Tensor<2>) -> Tensor<2> {
+        self.critic.forward(critic_obs)
+    }
+
+    /// The standard deviation of the action noise, `[num_actions]`. A scalar parameter is
+    /// clamped at 1e-6 so a step that drives it negative cannot produce an invalid Gaussian
+    /// (RSL-RL 5 clamps the same way).
+    pub fn action_std(&self) -> Tensor<1> {
+        match self.noise_std_type {
+            NoiseStdType::Scalar => self.std.val().clamp_min(1e-6),
+            NoiseStdType::Log => self.std.val().exp(),
+        }
+    }
+}

@@ -1,0 +1,579 @@
+//! Proximal policy optimisation with RSL-RL's exact semantics (spec §6.3): time-out
+//! bootstrapping, GAE, whole-rollout advantage normalisation, one shuffle reused across epochs,
+//! the KL-adaptive learning rate applied per minibatch before its gradient step, clipped
+//! surrogate and value losses, an entropy bonus and a global gradient-norm clip.
+
+use std::f32::consts::PI;
+use std::path::Path;
+
+use burn::module::{Module, ModuleVisitor, Param};
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::tensor::{Device, Tensor, TensorData};
+use orbit_core::rng::EnvRng;
+
+use crate::cfg::{PpoCfg, Schedule};
+use crate::model::ActorCritic;
+use crate::storage::{self, RolloutStorage};
+use crate::{RlError, streams};
+
+/// Mean losses of one update (over epochs and minibatches).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LossStats {
+    /// Value-function loss.
+    pub value: f32,
+    /// Clipped surrogate loss.
+    pub surrogate: f32,
+    /// Mean policy entropy.
+    pub entropy: f32,
+}
+
+/// The PPO learner: the network, its Adam optimiser and the rollout storage.
+pub struct Ppo {
+    /// Algorithm settings.
+    pub cfg: PpoCfg,
+    /// The actor-critic being trained.
+    pub model: ActorCritic,
+    /// The current learning rate (the adaptive schedule changes it; it persists across
+    /// iterations).
+    pub learning_rate: f64,
+    /// This iteration's transitions.
+    pub storage: RolloutStorage,
+    optimizer: ModuleOptimizer,
+    device: Device,
+    seed: u64,
+    /// Per-env action-noise streams: each env's samples depend only on the seed, the env and
+    /// how many actions it has taken.
+    noise: Vec<EnvRng>,
+    /// A gradient-free copy of the model used while collecting a rollout.
+    rollout_model: Option<ActorCritic>,
+    /// The action standard deviation during the current rollout.
+    sigma: Vec<f32>,
+    updates: u32,
+}
+
+/// A `[rows, cols]` tensor from row-major values.
+fn tensor2(values: Vec<f32>, rows: usize, cols: usize, device: &Device) -> Tensor<2> {
+    Tensor::from_data(TensorData::new(values, [rows, cols]), device)
+}
+
+/// A `[n]` tensor.
+fn tensor1(values: Vec<f32>, device: &Device) -> Tensor<1> {
+    let n = values.len();
+    Tensor::from_data(TensorData::new(values, [n]), device)
+}
+
+/// A tensor's values, row-major.
+pub(crate) fn values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
+    t.into_data()
+        .try_into_vec::<f32>()
+        .expect("float tensors hold f32 values")
+}
+
+/// `log N(a; μ, σ)` summed over action dimensions, for one row.
+fn gaussian_log_prob(a: &[f32], mu: &[f32], sigma: &[f32]) -> f32 {
+    let half_log_2pi = 0.5 * (2.0 * PI).ln();
+    a.iter()
+        .zip(mu)
+        .zip(sigma)
+        .map(|((&a, &m), &s)| -(a - m).powi(2) / (2.0 * s * s) - s.ln() - half_log_2pi)
+        .sum()
+}
+
+impl Ppo {
+    /// A learner for `num_envs` envs collecting `num_steps` steps per iteration.
+    pub fn new(
+        cfg: PpoCfg,
+        model: ActorCritic,
+        num_envs: usize,
+        num_steps: usize,
+        dims: (usize, usize, usize),
+        seed: u64,
+        device: Device,
+    ) -> Self {
+        let (num_obs, num_critic_obs, num_actions) = dims;
+        let optimizer = AdamConfig::new().with_epsilon(1e-8).init();
+        let noise = (0..num_envs)
+            .map(|e| EnvRng::new(seed, e as u32, streams::ACTION_NOISE))
+            .collect();
+        Self {
+            learning_rate: cfg.learning_rate,
+            cfg,
+            model,
+            storage: RolloutStorage::new(num_steps, num_envs, num_obs, num_critic_obs, num_actions),
+            optimizer,
+            device,
+            seed,
+            noise,
+            rollout_model: None,
+            sigma: Vec::new(),
+            updates: 0,
+        }
+    }
+
+    /// The device the network lives on.
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    fn rollout_model(&mut self) -> &ActorCritic {
+        if self.rollout_model.is_none() {
+            let m = self.model.valid();
+            self.sigma = values(m.action_std());
+            self.rollout_model = Some(m);
+        }
+        self.rollout_model.as_ref().expect("just set")
+    }
+
+    /// Samples actions for the current observations (`a = μ + σ·ε`), writes them to `actions`
+    /// and stores the observations, values, log-probabilities and means of this step.
+    pub fn act(
+        &mut self,
+        obs: &[f32],
+        critic_obs: &[f32],
+        actions: &mut [f32],
+    ) -> Result<(), RlError> {
+        let s = &self.storage;
+        let (n, na, t) = (s.num_envs, s.num_actions, s.step);
+        let (no, nc) = (s.num_obs, s.num_critic_obs);
+        assert!(
+            t < s.num_steps,
+            "act called more often than num_steps_per_env"
+        );
+        let device = self.device.clone();
+        let model = self.rollout_model();
+        let mu = values(model.action_mean(tensor2(obs.to_vec(), n, no, &device)));
+        let value = values(model.value(tensor2(critic_obs.to_vec(), n, nc, &device)));
+        if mu.iter().chain(&value).any(|v| !v.is_finite()) {
+            return Err(RlError::NonFinite("the policy's output"));
+        }
+        let sigma = &self.sigma;
+        let s = &mut self.storage;
+        for e in 0..n {
+            let row = e * na..(e + 1) * na;
+            let rng = &mut self.noise[e];
+            for ((a, &m), &sd) in actions[row.clone()]
+                .iter_mut()
+                .zip(&mu[row.clone()])
+                .zip(sigma)
+            {
+                *a = m + sd * rng.normal();
+            }
+            s.actions_log_prob[t * n + e] =
+                gaussian_log_prob(&actions[row.clone()], &mu[row], sigma);
+        }
+        RolloutStorage::rows(&mut s.obs, t, n, no).copy_from_slice(obs);
+        RolloutStorage::rows(&mut s.critic_obs, t, n, nc).copy_from_slice(critic_obs);
+        RolloutStorage::rows(&mut s.actions, t, n, na).copy_from_slice(actions);
+        RolloutStorage::rows(&mut s.mu, t, n, na).copy_from_slice(&mu);
+        RolloutStorage::rows(&mut s.values, t, n, 1).copy_from_slice(&value);
+        s.sigma.copy_from_slice(sigma);
+        Ok(())
+    }
+
+    /// Stores the step's rewards and dones; a time-out adds `γ·V(s_t)` to the reward, since
+    /// the true terminal observation is gone (RSL-RL's bootstrap).
+    pub fn process_env_step(&mut self, rewards: &[f32], dones: &[bool], time_outs: &[bool]) {
+        let gamma = self.cfg.gamma;
+        let s = &mut self.storage;
+        let (n, t) = (s.num_envs, s.step);
+        for e in 0..n {
+            let i = t * n + e;
+            let bootstrap = if time_outs[e] {
+                gamma * s.values[i]
+            } else {
+                0.0
+            };
+            s.rewards[i] = rewards[e] + bootstrap;
+            s.dones[i] = f32::from(u8::from(dones[e]));
+        }
+        s.step += 1;
+    }
+
+    /// Computes returns and advantages with the values of the states after the last step.
+    pub fn compute_returns(&mut self, last_critic_obs: &[f32]) {
+        let (n, nc) = (self.storage.num_envs, self.storage.num_critic_obs);
+        let device = self.device.clone();
+        let last =
+            values(
+                self.rollout_model()
+                    .value(tensor2(last_critic_obs.to_vec(), n, nc, &device)),
+            );
+        let (gamma, lam) = (self.cfg.gamma, self.cfg.lam);
+        let per_mb = self.cfg.normalize_advantage_per_mini_batch;
+        self.storage.compute_returns(&last, gamma, lam, per_mb);
+    }
+
+    /// The PPO update over the stored rollout; clears the storage.
+    pub fn update(&mut self) -> Result<LossStats, RlError> {
+        self.rollout_model = None;
+        let cfg = self.cfg.clone();
+        let b = self.storage.batch_size();
+        let m = b / cfg.num_mini_batches;
+        if m == 0 {
+            return Err(RlError::EnvMismatch(format!(
+                "{b} transitions cannot fill {} minibatches",
+                cfg.num_mini_batches
+            )));
+        }
+        // One permutation per update, reused by every epoch (RSL-RL's generator).
+        let mut perm: Vec<usize> = (0..cfg.num_mini_batches * m).collect();
+        let mut rng = EnvRng::new(self.seed, self.updates, streams::SHUFFLE);
+        for i in (1..perm.len()).rev() {
+            let j = ((u64::from(rng.next_u32()) * (i as u64 + 1)) >> 32) as usize;
+            perm.swap(i, j);
+        }
+        self.updates += 1;
+        let mut totals = LossStats::default();
+        let mut batch = Minibatch::default();
+        for _ in 0..cfg.num_learning_epochs {
+            for k in 0..cfg.num_mini_batches {
+                batch.gather(
+                    &self.storage,
+                    &perm[k * m..(k + 1) * m],
+                    cfg.normalize_advantage_per_mini_batch,
+                );
+                let stats = self.step_minibatch(&batch)?;
+                totals.value += stats.value;
+                totals.surrogate += stats.surrogate;
+                totals.entropy += stats.entropy;
+            }
+        }
+        let updates = (cfg.num_learning_epochs * cfg.num_mini_batches) as f32;
+        self.storage.step = 0;
+        Ok(LossStats {
+            value: totals.value / updates,
+            surrogate: totals.surrogate / updates,
+            entropy: totals.entropy / updates,
+        })
+    }
+
+    /// The losses of a minibatch under the current network, and the KL divergence from the
+    /// sampling policy (a plain number; it steers the adaptive learning rate).
+    fn minibatch_losses(&self, mb: &Minibatch) -> MinibatchLosses {
+        let cfg = &self.cfg;
+        let s = &self.storage;
+        let (rows, na) = (mb.advantages.len(), s.num_actions);
+        let d = &self.device;
+        let obs = tensor2(mb.obs.clone(), rows, s.num_obs, d);
+        let critic_obs = tensor2(mb.critic_obs.clone(), rows, s.num_critic_obs, d);
+        let actions = tensor2(mb.actions.clone(), rows, na, d);
+        let old_mu = tensor2(mb.mu.clone(), rows, na, d);
+        let old_sigma = tensor1(s.sigma.clone(), d).reshape([1, na]);
+        let old_log_prob = tensor1(mb.log_prob.clone(), d);
+        let advantages = tensor1(mb.advantages.clone(), d);
+        let returns = tensor1(mb.returns.clone(), d);
+        let old_values = tensor1(mb.values.clone(), d);
+
+        let mu = self.model.action_mean(obs);
+        let sigma = self.model.action_std().reshape([1, na]);
+        let log_sigma_sum = sigma.clone().log().sum();
+        // log N(a; μ, σ) summed over actions: −Σ (a−μ)²/(2σ²) − Σ ln σ − A/2·ln 2π.
+        let log_prob = (actions - mu.clone())
+            .powi_scalar(2)
+            .div(sigma.clone().powi_scalar(2).mul_scalar(2.0))
+            .sum_dim(1)
+            .reshape([rows])
+            .neg()
+            .sub(log_sigma_sum.clone())
+            .sub_scalar(na as f32 * 0.5 * (2.0 * PI).ln());
+        // The entropy of a state-independent Gaussian is the same for every row.
+        let entropy = log_sigma_sum.add_scalar(na as f32 * (0.5 + 0.5 * (2.0 * PI).ln()));
+
+        let (mu_d, sigma_d) = (mu.detach(), sigma.detach());
+        let kl = (sigma_d
+            .clone()
+            .div(old_sigma.clone())
+            .add_scalar(1e-5)
+            .log()
+            + (old_sigma.powi_scalar(2) + (old_mu - mu_d).powi_scalar(2))
+                .div(sigma_d.powi_scalar(2).mul_scalar(2.0)))
+        .sub_scalar(0.5)
+        .sum_dim(1)
+        .mean()
+        .into_scalar::<f32>();
+
+        let ratio = (log_prob - old_log_prob).exp();
+        let eps = cfg.clip_param;
+        let surrogate = advantages.clone().neg().mul(ratio.clone());
+        let surrogate_clipped = advantages.neg().mul(ratio.clamp(1.0 - eps, 1.0 + eps));
+        let surrogate = surrogate.max_pair(surrogate_clipped).mean();
+
+        let value = self.model.value(critic_obs).reshape([rows]);
+        let value = if cfg.use_clipped_value_loss {
+            let clipped = old_values.clone() + (value.clone() - old_values).clamp(-eps, eps);
+            let a = (value - returns.clone()).powi_scalar(2);
+            let b = (clipped - returns).powi_scalar(2);
+            a.max_pair(b).mean()
+        } else {
+            (returns - value).powi_scalar(2).mean()
+        };
+        MinibatchLosses {
+            kl,
+            surrogate,
+            value,
+            entropy,
+        }
+    }
+
+    fn step_minibatch(&mut self, mb: &Minibatch) -> Result<LossStats, RlError> {
+        let l = self.minibatch_losses(mb);
+        let cfg = &self.cfg;
+        if cfg.schedule == Schedule::Adaptive {
+            let desired = cfg.desired_kl;
+            if l.kl > 2.0 * desired {
+                self.learning_rate = (self.learning_rate / 1.5).max(1e-5);
+            } else if l.kl > 0.0 && l.kl < desired / 2.0 {
+                self.learning_rate = (self.learning_rate * 1.5).min(1e-2);
+            }
+        }
+        let loss = l.surrogate.clone() + l.value.clone().mul_scalar(cfg.value_loss_coef)
+            - l.entropy.clone().mul_scalar(cfg.entropy_coef);
+        let stats = LossStats {
+            value: l.value.into_scalar::<f32>(),
+            surrogate: l.surrogate.into_scalar::<f32>(),
+            entropy: l.entropy.into_scalar::<f32>(),
+        };
+        if !(stats.value.is_finite() && stats.surrogate.is_finite()) {
+            return Err(RlError::NonFinite("the PPO loss"));
+        }
+        let mut grads = GradientsParams::from_grads(loss.backward(), &self.model);
+        clip_grad_norm(&self.model, &mut grads, cfg.max_grad_norm);
+        let model = self.model.clone();
+        self.model = self.optimizer.step(self.learning_rate, model, grads);
+        Ok(stats)
+    }
+
+    /// Saves the network and the optimiser state as burnpack files `<base>.bpk` and
+    /// `<base>.optim.bpk`.
+    pub fn save(&self, base: &Path) -> Result<(), RlError> {
+        let model_path = base.with_extension("bpk");
+        self.model
+            .clone()
+            .save_file(&model_path)
+            .map_err(|e| RlError::Checkpoint {
+                path: model_path,
+                message: e.to_string(),
+            })?;
+        let optim_path = base.with_extension("optim.bpk");
+        self.optimizer
+            .save(&optim_path)
+            .map_err(|e| RlError::Checkpoint {
+                path: optim_path,
+                message: e.to_string(),
+            })
+    }
+
+    /// Loads the network (and, if `with_optimizer`, the optimiser state) saved by [`Ppo::save`].
+    pub fn load(&mut self, base: &Path, with_optimizer: bool) -> Result<(), RlError> {
+        self.model = load_model(self.model.clone(), base)?;
+        self.rollout_model = None;
+        if with_optimizer {
+            let path = base.with_extension("optim.bpk");
+            let fresh = AdamConfig::new().with_epsilon(1e-8).init();
+            self.optimizer = fresh.load(&path).map_err(|e| RlError::Checkpoint {
+                path,
+                message: e.to_string(),
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// Loads network weights saved by [`Ppo::save`] into `model` (which fixes the architecture).
+pub fn load_model(model: ActorCritic, base: &Path) -> Result<ActorCritic, RlError> {
+    let path = base.with_extension("bpk");
+    model.try_load_file(&path).map_err(|e| RlError::Checkpoint {
+        path,
+        message: e.to_string(),
+    })
+}
+
+/// Scales all gradients by `max_norm / (‖g‖ + 1e-6)` when the global norm `‖g‖` over every
+/// parameter exceeds `max_norm` (`torch.nn.utils.clip_grad_norm_`).
+fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, max_norm: f32) {
+    struct SquaredNorm<'a> {
+        grads: &'a GradientsParams,
+        total: Option<Tensor<1>>,
+    }
+    impl ModuleVisitor for SquaredNorm<'_> {
+        fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+            if let Some(g) = self.grads.get::<D>(param.id) {
+                let s = g.powi_scalar(2).sum();
+                self.total = Some(match self.total.take() {
+                    Some(t) => t + s,
+                    None => s,
+                });
+            }
+        }
+    }
+    struct Scale<'a> {
+        grads: &'a mut GradientsParams,
+        factor: f32,
+    }
+    impl ModuleVisitor for Scale<'_> {
+        fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+            if let Some(g) = self.grads.remove::<D>(param.id) {
+                self.grads.register(param.id, g.mul_scalar(self.factor));
+            }
+        }
+    }
+    let mut norm = SquaredNorm { grads, total: None };
+    model.visit(&mut norm);
+    let Some(total) = norm.total else { return };
+    let norm = total.into_scalar::<f32>().sqrt();
+    let factor = max_norm / (norm + 1e-6);
+    if factor < 1.0 {
+        model.visit(&mut Scale { grads, factor });
+    }
+}
+
+/// The loss terms of one minibatch.
+struct MinibatchLosses {
+    /// Mean KL divergence from the sampling policy.
+    kl: f32,
+    /// Clipped surrogate loss.
+    surrogate: Tensor<1>,
+    /// (Clipped) value loss.
+    value: Tensor<1>,
+    /// Policy entropy.
+    entropy: Tensor<1>,
+}
+
+/// The rows of one minibatch, gathered from the storage.
+#[derive(Default)]
+struct Minibatch {
+    obs: Vec<f32>,
+    critic_obs: Vec<f32>,
+    actions: Vec<f32>,
+    mu: Vec<f32>,
+    log_prob: Vec<f32>,
+    advantages: Vec<f32>,
+    returns: Vec<f32>,
+    values: Vec<f32>,
+}
+
+impl Minibatch {
+    fn gather(&mut self, s: &RolloutStorage, idx: &[usize], normalize: bool) {
+        fn rows(dst: &mut Vec<f32>, src: &[f32], dim: usize, idx: &[usize]) {
+            dst.clear();
+            for &i in idx {
+                dst.extend_from_slice(&src[i * dim..(i + 1) * dim]);
+            }
+        }
+        rows(&mut self.obs, &s.obs, s.num_obs, idx);
+        rows(&mut self.critic_obs, &s.critic_obs, s.num_critic_obs, idx);
+        rows(&mut self.actions, &s.actions, s.num_actions, idx);
+        rows(&mut self.mu, &s.mu, s.num_actions, idx);
+        rows(&mut self.log_prob, &s.actions_log_prob, 1, idx);
+        rows(&mut self.advantages, &s.advantages, 1, idx);
+        rows(&mut self.returns, &s.returns, 1, idx);
+        rows(&mut self.values, &s.values, 1, idx);
+        if normalize {
+            storage::normalize(&mut self.advantages);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cfg::{Activation, NoiseStdType, PolicyCfg};
+
+    fn ppo(num_envs: usize, num_steps: usize) -> Ppo {
+        let policy = PolicyCfg {
+            init_noise_std: 0.7,
+            actor_hidden_dims: vec![8, 8],
+            critic_hidden_dims: vec![8],
+            activation: Activation::Elu,
+            noise_std_type: NoiseStdType::Scalar,
+        };
+        let cfg = PpoCfg {
+            value_loss_coef: 1.0,
+            use_clipped_value_loss: true,
+            clip_param: 0.2,
+            entropy_coef: 0.01,
+            num_learning_epochs: 2,
+            num_mini_batches: 2,
+            learning_rate: 1e-3,
+            schedule: Schedule::Adaptive,
+            gamma: 0.99,
+            lam: 0.95,
+            desired_kl: 0.01,
+            max_grad_norm: 1.0,
+            normalize_advantage_per_mini_batch: false,
+        };
+        let device = Device::flex().autodiff();
+        let model = ActorCritic::new(&policy, 3, 3, 2, 5, &device);
+        Ppo::new(cfg, model, num_envs, num_steps, (3, 3, 2), 5, device)
+    }
+
+    /// The whole rollout as one minibatch.
+    fn whole_rollout(p: &Ppo) -> Minibatch {
+        let all: Vec<usize> = (0..p.storage.batch_size()).collect();
+        let mut mb = Minibatch::default();
+        mb.gather(&p.storage, &all, false);
+        mb
+    }
+
+    /// Fills the storage with a rollout on synthetic observations and rewards.
+    fn rollout(p: &mut Ppo) {
+        let (n, t) = (p.storage.num_envs, p.storage.num_steps);
+        let mut rng = EnvRng::new(1, 0, 99);
+        let mut actions = vec![0.0; n * 2];
+        for _ in 0..t {
+            let obs: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
+            p.act(&obs, &obs, &mut actions).unwrap();
+            let rewards: Vec<f32> = actions.chunks(2).map(|a| -a[0] * a[0]).collect();
+            p.process_env_step(&rewards, &vec![false; n], &vec![false; n]);
+        }
+        let last: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
+        p.compute_returns(&last);
+    }
+
+    /// Before any update the network is the sampling policy: the ratio is 1, so the surrogate
+    /// loss is −mean(advantage) (0 over a whole normalised rollout), and the KL is RSL-RL's
+    /// floor `A·ln(1 + 1e-5)` (its formula adds 1e-5 inside the log).
+    #[test]
+    fn first_minibatch_sees_the_sampling_policy() {
+        let mut p = ppo(16, 4);
+        rollout(&mut p);
+        let l = p.minibatch_losses(&whole_rollout(&p));
+        let floor = 2.0 * (1.0f32 + 1e-5).ln();
+        assert!((l.kl - floor).abs() < 1e-6, "kl {}", l.kl);
+        let surrogate = l.surrogate.into_scalar::<f32>();
+        assert!(surrogate.abs() < 1e-5, "surrogate {surrogate}");
+        // Entropy of N(·, 0.7²) in 2 dimensions: 2·(0.5 + 0.5 ln 2π + ln 0.7).
+        let expected = 2.0 * (0.5 + 0.5 * (2.0 * PI).ln() + 0.7f32.ln());
+        assert!((l.entropy.into_scalar::<f32>() - expected).abs() < 1e-5);
+    }
+
+    /// Stored log-probabilities are those of the sampled actions under N(μ, σ²).
+    #[test]
+    fn log_prob_of_a_standard_normal() {
+        let lp = gaussian_log_prob(&[1.0, 0.0], &[0.0, 0.0], &[1.0, 2.0]);
+        let expected = -0.5 - (2.0 * PI).ln() - 2.0f32.ln();
+        assert!((lp - expected).abs() < 1e-6);
+    }
+
+    /// After clipping, the global gradient norm equals the limit.
+    #[test]
+    fn gradient_norm_is_clipped_globally() {
+        let mut p = ppo(16, 4);
+        rollout(&mut p);
+        let l = p.minibatch_losses(&whole_rollout(&p));
+        let loss = l.surrogate + l.value.mul_scalar(100.0);
+        let mut grads = GradientsParams::from_grads(loss.backward(), &p.model);
+        clip_grad_norm(&p.model, &mut grads, 1e-3);
+        struct Norm<'a>(&'a GradientsParams, f32);
+        impl ModuleVisitor for Norm<'_> {
+            fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+                if let Some(g) = self.0.get::<D>(param.id) {
+                    self.1 += g.powi_scalar(2).sum().into_scalar::<f32>();
+                }
+            }
+        }
+        let mut n = Norm(&grads, 0.0);
+        p.model.visit(&mut n);
+        assert!((n.1.sqrt() - 1e-3).abs() < 1e-6, "norm {}", n.1.sqrt());
+    }
+}

@@ -1,0 +1,423 @@
+//! The on-policy runner (RSL-RL's `OnPolicyRunner`, spec §6.2): collect a rollout, compute
+//! returns, update, log, checkpoint.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use burn::module::Module;
+use burn::tensor::Device;
+use serde::{Deserialize, Serialize};
+
+use crate::RlError;
+use crate::cfg::{PolicyCfg, RunnerCfg};
+use crate::logger::ScalarLog;
+use crate::model::ActorCritic;
+use crate::normalizer::EmpiricalNormalizer;
+use crate::ppo::{LossStats, Ppo, values};
+use crate::vec_env::VecEnv;
+
+/// Rows after which the observation statistics freeze (RSL-RL's `until`).
+const NORMALIZER_UNTIL: u64 = 100_000_000;
+
+/// Completed episodes kept for the running means (RSL-RL's 100-long deques).
+const EPISODE_WINDOW: usize = 100;
+
+/// What one iteration measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IterationLog {
+    /// 0-based iteration.
+    pub iteration: usize,
+    /// Env transitions collected so far (all envs, all iterations, this one included).
+    pub env_steps: u64,
+    /// Wall-clock seconds since training started (collection + learning, summed over
+    /// iterations of this and resumed runs).
+    pub wall_time: f64,
+    /// Mean undiscounted return of the last ≤ 100 completed episodes.
+    pub mean_return: Option<f32>,
+    /// Mean length (steps) of the last ≤ 100 completed episodes.
+    pub mean_episode_length: Option<f32>,
+    /// Mean of the runner config's `success_metric` over this iteration's finished episodes.
+    pub success_rate: Option<f32>,
+    /// PPO losses.
+    pub losses: LossStats,
+    /// Learning rate after the update.
+    pub learning_rate: f64,
+    /// Mean action-noise standard deviation.
+    pub mean_noise_std: f32,
+    /// Transitions per second of this iteration (collection and learning).
+    pub fps: f64,
+    /// Seconds spent collecting.
+    pub collection_time: f64,
+    /// Seconds spent learning.
+    pub learning_time: f64,
+    /// Per-key means of the env's episode logs over this iteration.
+    pub episode: BTreeMap<String, f32>,
+}
+
+/// Everything besides the weights that a checkpoint must restore (`model_<it>.json`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CheckpointState {
+    /// Iteration the checkpoint was taken after (a resumed run continues from it).
+    pub iteration: usize,
+    /// Learning rate at that point.
+    pub learning_rate: f64,
+    /// Transitions collected so far.
+    pub env_steps: u64,
+    /// Training wall-clock seconds so far.
+    pub wall_time: f64,
+    /// Actor input width.
+    pub num_obs: usize,
+    /// Critic input width.
+    pub num_critic_obs: usize,
+    /// Action width.
+    pub num_actions: usize,
+    /// The network's architecture.
+    pub policy: PolicyCfg,
+    /// Actor observation statistics, if normalisation is on.
+    pub obs_normalizer: Option<EmpiricalNormalizer>,
+    /// Critic observation statistics, if normalisation is on.
+    pub critic_obs_normalizer: Option<EmpiricalNormalizer>,
+}
+
+/// Trains a policy on a [`VecEnv`] with PPO.
+pub struct OnPolicyRunner<E: VecEnv> {
+    /// The environment.
+    pub env: E,
+    /// The runner config.
+    pub cfg: RunnerCfg,
+    /// The learner.
+    pub alg: Ppo,
+    obs_normalizer: Option<EmpiricalNormalizer>,
+    critic_normalizer: Option<EmpiricalNormalizer>,
+    log_dir: Option<PathBuf>,
+    scalars: Option<ScalarLog>,
+    /// Iterations done (the next iteration's index).
+    pub iteration: usize,
+    env_steps: u64,
+    wall_time: f64,
+    /// Every iteration's log, in order.
+    pub history: Vec<IterationLog>,
+    returns: VecDeque<f32>,
+    lengths: VecDeque<f32>,
+    current_return: Vec<f32>,
+    current_length: Vec<u32>,
+    /// Show a progress bar on the terminal while learning.
+    pub show_progress: bool,
+    device: Device,
+}
+
+impl<E: VecEnv> OnPolicyRunner<E> {
+    /// A runner with a freshly initialised network on `device`, logging into `log_dir` (none
+    /// for no files).
+    pub fn new(
+        env: E,
+        cfg: RunnerCfg,
+        log_dir: Option<PathBuf>,
+        device: Device,
+    ) -> Result<Self, RlError> {
+        let (n, no, nc, na) = (
+            env.num_envs(),
+            env.num_obs(),
+            env.num_critic_obs(),
+            env.num_actions(),
+        );
+        let model = ActorCritic::new(
+            &cfg.policy,
+            no,
+            nc,
+            na,
+            cfg.seed,
+            &device.clone().autodiff(),
+        );
+        let alg = Ppo::new(
+            cfg.algorithm.clone(),
+            model,
+            n,
+            cfg.num_steps_per_env,
+            (no, nc, na),
+            cfg.seed,
+            device.clone().autodiff(),
+        );
+        let normalizers = cfg.empirical_normalization;
+        let scalars = match &log_dir {
+            Some(dir) => {
+                std::fs::create_dir_all(dir).map_err(RlError::io(dir))?;
+                Some(ScalarLog::create(&dir.join("scalars.csv"))?)
+            }
+            None => None,
+        };
+        Ok(Self {
+            obs_normalizer: normalizers.then(|| EmpiricalNormalizer::new(no, NORMALIZER_UNTIL)),
+            critic_normalizer: normalizers.then(|| EmpiricalNormalizer::new(nc, NORMALIZER_UNTIL)),
+            env,
+            cfg,
+            alg,
+            log_dir,
+            scalars,
+            iteration: 0,
+            env_steps: 0,
+            wall_time: 0.0,
+            history: Vec::new(),
+            returns: VecDeque::with_capacity(EPISODE_WINDOW),
+            lengths: VecDeque::with_capacity(EPISODE_WINDOW),
+            current_return: vec![0.0; n],
+            current_length: vec![0; n],
+            show_progress: false,
+            device,
+        })
+    }
+
+    /// The run directory, if logging to files.
+    pub fn log_dir(&self) -> Option<&Path> {
+        self.log_dir.as_deref()
+    }
+
+    /// Current observations, normalised (and, in training, folded into the statistics).
+    fn observe(&mut self, update: bool) -> (Vec<f32>, Vec<f32>) {
+        let mut obs = self.env.observations().to_vec();
+        let mut critic = self.env.critic_observations().to_vec();
+        for (norm, x) in [
+            (&mut self.obs_normalizer, &mut obs),
+            (&mut self.critic_normalizer, &mut critic),
+        ] {
+            if let Some(n) = norm {
+                if update {
+                    n.update(x);
+                }
+                n.normalize(x);
+            }
+        }
+        (obs, critic)
+    }
+
+    /// Runs `num_iterations` iterations (continuing the numbering of a resumed run), saving a
+    /// checkpoint every `save_interval` iterations and after the last.
+    pub fn learn(&mut self, num_iterations: usize) -> Result<(), RlError> {
+        if self.iteration == 0 && self.cfg.init_at_random_ep_len {
+            self.env.randomize_episode_lengths(self.cfg.seed)?;
+        }
+        let (n, na) = (self.env.num_envs(), self.env.num_actions());
+        let t_steps = self.cfg.num_steps_per_env;
+        let progress = self
+            .show_progress
+            .then(|| crate::progress::bar(num_iterations as u64));
+        let mut actions = vec![0.0f32; n * na];
+        let (mut obs, mut critic) = self.observe(true);
+        let end = self.iteration + num_iterations;
+        while self.iteration < end {
+            let it = self.iteration;
+            let start = Instant::now();
+            let mut success = (0.0f64, 0usize);
+            let mut episode: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+            for _ in 0..t_steps {
+                self.alg.act(&obs, &critic, &mut actions)?;
+                let step = self.env.step(&actions)?;
+                self.alg
+                    .process_env_step(step.rewards, step.dones, step.time_outs);
+                for (key, &v) in step.log {
+                    let e = episode.entry(key.clone()).or_default();
+                    e.0 += f64::from(v);
+                    e.1 += 1;
+                }
+                if let Some(v) = self
+                    .cfg
+                    .success_metric
+                    .as_ref()
+                    .and_then(|k| step.log.get(k))
+                {
+                    success.0 += f64::from(*v);
+                    success.1 += 1;
+                }
+                for e in 0..n {
+                    self.current_return[e] += step.rewards[e];
+                    self.current_length[e] += 1;
+                    if step.dones[e] {
+                        if self.returns.len() == EPISODE_WINDOW {
+                            self.returns.pop_front();
+                            self.lengths.pop_front();
+                        }
+                        self.returns.push_back(self.current_return[e]);
+                        self.lengths.push_back(self.current_length[e] as f32);
+                        self.current_return[e] = 0.0;
+                        self.current_length[e] = 0;
+                    }
+                }
+                (obs, critic) = self.observe(true);
+            }
+            self.alg.compute_returns(&critic);
+            let collection_time = start.elapsed().as_secs_f64();
+            let learn_start = Instant::now();
+            let losses = self.alg.update()?;
+            let learning_time = learn_start.elapsed().as_secs_f64();
+            self.env_steps += (n * t_steps) as u64;
+            self.wall_time += collection_time + learning_time;
+            let mean =
+                |q: &VecDeque<f32>| (!q.is_empty()).then(|| q.iter().sum::<f32>() / q.len() as f32);
+            let noise = values(self.alg.model.action_std());
+            let log = IterationLog {
+                iteration: it,
+                env_steps: self.env_steps,
+                wall_time: self.wall_time,
+                mean_return: mean(&self.returns),
+                mean_episode_length: mean(&self.lengths),
+                success_rate: (success.1 > 0).then(|| (success.0 / success.1 as f64) as f32),
+                losses,
+                learning_rate: self.alg.learning_rate,
+                mean_noise_std: noise.iter().sum::<f32>() / noise.len() as f32,
+                fps: (n * t_steps) as f64 / (collection_time + learning_time),
+                collection_time,
+                learning_time,
+                episode: episode
+                    .into_iter()
+                    .map(|(k, (s, c))| (k, (s / c as f64) as f32))
+                    .collect(),
+            };
+            if let Some(s) = &mut self.scalars {
+                s.write(&log)?;
+            }
+            if let Some(bar) = &progress {
+                crate::progress::update(bar, &log);
+            }
+            tracing::debug!(iteration = it, ?log.mean_return, ?log.success_rate, "iteration");
+            self.history.push(log);
+            self.iteration += 1;
+            if self.iteration.is_multiple_of(self.cfg.save_interval.max(1)) || self.iteration == end
+            {
+                self.save_checkpoint()?;
+            }
+        }
+        if let Some(bar) = progress {
+            bar.finish();
+        }
+        Ok(())
+    }
+
+    /// The current policy for inference (mean actions, current normaliser).
+    pub fn inference_policy(&self) -> Policy {
+        Policy {
+            model: self.alg.model.valid(),
+            normalizer: self.obs_normalizer.clone(),
+            device: self.device.clone(),
+            num_obs: self.env.num_obs(),
+            num_actions: self.env.num_actions(),
+        }
+    }
+
+    /// Writes `model_<it>.{bpk,optim.bpk,json}` into the run directory (`it` = the last
+    /// finished iteration), if there is one.
+    pub fn save_checkpoint(&self) -> Result<(), RlError> {
+        let Some(dir) = &self.log_dir else {
+            return Ok(());
+        };
+        let base = dir.join(format!("model_{}", self.iteration.saturating_sub(1)));
+        self.alg.save(&base)?;
+        let state = CheckpointState {
+            iteration: self.iteration,
+            learning_rate: self.alg.learning_rate,
+            env_steps: self.env_steps,
+            wall_time: self.wall_time,
+            num_obs: self.env.num_obs(),
+            num_critic_obs: self.env.num_critic_obs(),
+            num_actions: self.env.num_actions(),
+            policy: self.cfg.policy.clone(),
+            obs_normalizer: self.obs_normalizer.clone(),
+            critic_obs_normalizer: self.critic_normalizer.clone(),
+        };
+        let path = base.with_extension("json");
+        let text = serde_json::to_string_pretty(&state).expect("plain data serialises");
+        std::fs::write(&path, text).map_err(RlError::io(path))
+    }
+
+    /// Restores weights, optimiser, normalisers, learning rate and iteration count from a
+    /// checkpoint written by [`save_checkpoint`](Self::save_checkpoint) (`base` without
+    /// extension, e.g. `logs/x/2026-…/model_49`).
+    pub fn load_checkpoint(&mut self, base: &Path) -> Result<(), RlError> {
+        let state = read_state(base)?;
+        let dims = (
+            self.env.num_obs(),
+            self.env.num_critic_obs(),
+            self.env.num_actions(),
+        );
+        if (state.num_obs, state.num_critic_obs, state.num_actions) != dims {
+            return Err(RlError::Checkpoint {
+                path: base.with_extension("json"),
+                message: format!(
+                    "trained for (obs, critic obs, actions) = {:?}, this env has {dims:?}",
+                    (state.num_obs, state.num_critic_obs, state.num_actions)
+                ),
+            });
+        }
+        self.alg.load(base, true)?;
+        self.alg.learning_rate = state.learning_rate;
+        self.obs_normalizer = state.obs_normalizer;
+        self.critic_normalizer = state.critic_obs_normalizer;
+        self.iteration = state.iteration;
+        self.env_steps = state.env_steps;
+        self.wall_time = state.wall_time;
+        Ok(())
+    }
+}
+
+/// Reads a checkpoint's `model_<it>.json`.
+pub fn read_state(base: &Path) -> Result<CheckpointState, RlError> {
+    let path = base.with_extension("json");
+    let text = std::fs::read_to_string(&path).map_err(RlError::io(&path))?;
+    serde_json::from_str(&text).map_err(|e| RlError::Checkpoint {
+        path,
+        message: e.to_string(),
+    })
+}
+
+/// A trained policy for inference: observation normaliser + actor, mean actions.
+pub struct Policy {
+    model: ActorCritic,
+    normalizer: Option<EmpiricalNormalizer>,
+    device: Device,
+    num_obs: usize,
+    num_actions: usize,
+}
+
+impl Policy {
+    /// Loads a checkpoint (`base` without extension) onto `device`.
+    pub fn load(base: &Path, device: Device) -> Result<Self, RlError> {
+        let state = read_state(base)?;
+        let model = ActorCritic::new(
+            &state.policy,
+            state.num_obs,
+            state.num_critic_obs,
+            state.num_actions,
+            0,
+            &device,
+        );
+        let model = crate::ppo::load_model(model, base)?;
+        Ok(Self {
+            model,
+            normalizer: state.obs_normalizer,
+            device,
+            num_obs: state.num_obs,
+            num_actions: state.num_actions,
+        })
+    }
+
+    /// Observation width the policy expects.
+    pub fn num_obs(&self) -> usize {
+        self.num_obs
+    }
+
+    /// Mean actions for a batch of raw observations (`[rows, num_obs]`).
+    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
+        let mut x = obs.to_vec();
+        if let Some(n) = &self.normalizer {
+            n.normalize(&mut x);
+        }
+        let rows = x.len() / self.num_obs;
+        let t = burn::tensor::Tensor::from_data(
+            burn::tensor::TensorData::new(x, [rows, self.num_obs]),
+            &self.device,
+        );
+        let a = values(self.model.action_mean(t));
+        debug_assert_eq!(a.len(), rows * self.num_actions);
+        a
+    }
+}

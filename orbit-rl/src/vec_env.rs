@@ -1,0 +1,149 @@
+//! The learner's view of an environment (RSL-RL's `VecEnv`), and its implementation for
+//! [`ManagerBasedRlEnv`] (Isaac Lab's `RslRlVecEnvWrapper`).
+
+use std::collections::BTreeMap;
+
+use orbit_core::rng::EnvRng;
+use orbit_managers::ManagerBasedRlEnv;
+
+use crate::{RlError, streams};
+
+/// What one step of a vectorised env returns.
+pub struct VecEnvStep<'a> {
+    /// Rewards, one per env.
+    pub rewards: &'a [f32],
+    /// Episode ended (terminated or timed out), one per env.
+    pub dones: &'a [bool],
+    /// Episode timed out, one per env (the learner bootstraps these).
+    pub time_outs: &'a [bool],
+    /// Episode statistics of the envs that finished in this step (empty if none did).
+    pub log: &'a BTreeMap<String, f32>,
+}
+
+/// A batch of environments as the learner sees it. The env resets itself: finished envs come
+/// back already reset, with the observation of their new episode.
+pub trait VecEnv {
+    /// Number of envs.
+    fn num_envs(&self) -> usize;
+    /// Width of one env's action.
+    fn num_actions(&self) -> usize;
+    /// Width of one env's actor observation.
+    fn num_obs(&self) -> usize;
+    /// Width of one env's critic observation.
+    fn num_critic_obs(&self) -> usize;
+    /// Steps after which an episode times out.
+    fn max_episode_length(&self) -> u32;
+    /// Actor observations, `[num_envs, num_obs]`.
+    fn observations(&self) -> &[f32];
+    /// Critic observations, `[num_envs, num_critic_obs]` (the actor's unless the env has a
+    /// `critic` group).
+    fn critic_observations(&self) -> &[f32];
+    /// Applies one action per env and advances one step.
+    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError>;
+    /// Moves every env to a random step of its episode (uniform in `[0, max_episode_length)`),
+    /// drawn from `seed`, so that time-outs spread out.
+    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError>;
+}
+
+/// A [`ManagerBasedRlEnv`] as a [`VecEnv`]: observation group `policy` for the actor, `critic`
+/// (if present) for the critic. Resets the env once on construction.
+pub struct RlVecEnv {
+    env: ManagerBasedRlEnv,
+    dones: Vec<bool>,
+    num_obs: usize,
+    num_critic_obs: usize,
+    empty_log: BTreeMap<String, f32>,
+}
+
+impl RlVecEnv {
+    /// Wraps and resets `env`.
+    pub fn new(mut env: ManagerBasedRlEnv) -> Result<Self, RlError> {
+        env.reset()?;
+        let num_obs = env.observation("policy").map(|(_, d)| d).ok_or_else(|| {
+            RlError::EnvMismatch("the env has no `policy` observation group".into())
+        })?;
+        let num_critic_obs = env.observation("critic").map_or(num_obs, |(_, d)| d);
+        Ok(Self {
+            dones: vec![false; env.num_envs()],
+            env,
+            num_obs,
+            num_critic_obs,
+            empty_log: BTreeMap::new(),
+        })
+    }
+
+    /// The wrapped env.
+    pub fn env(&self) -> &ManagerBasedRlEnv {
+        &self.env
+    }
+
+    /// The wrapped env, mutably.
+    pub fn env_mut(&mut self) -> &mut ManagerBasedRlEnv {
+        &mut self.env
+    }
+}
+
+impl VecEnv for RlVecEnv {
+    fn num_envs(&self) -> usize {
+        self.env.num_envs()
+    }
+
+    fn num_actions(&self) -> usize {
+        self.env.action_dim()
+    }
+
+    fn num_obs(&self) -> usize {
+        self.num_obs
+    }
+
+    fn num_critic_obs(&self) -> usize {
+        self.num_critic_obs
+    }
+
+    fn max_episode_length(&self) -> u32 {
+        self.env.max_episode_length()
+    }
+
+    fn observations(&self) -> &[f32] {
+        self.env.observation("policy").expect("checked in new").0
+    }
+
+    fn critic_observations(&self) -> &[f32] {
+        self.env
+            .observation("critic")
+            .or_else(|| self.env.observation("policy"))
+            .expect("checked in new")
+            .0
+    }
+
+    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
+        let r = self.env.step(actions)?;
+        let mut any_done = false;
+        for ((d, &t), &o) in self.dones.iter_mut().zip(r.terminated).zip(r.time_outs) {
+            *d = t || o;
+            any_done |= *d;
+        }
+        Ok(VecEnvStep {
+            rewards: r.reward,
+            dones: &self.dones,
+            time_outs: r.time_outs,
+            log: if any_done {
+                &r.extras.log
+            } else {
+                &self.empty_log
+            },
+        })
+    }
+
+    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError> {
+        let max = self.env.max_episode_length();
+        let lengths: Vec<u32> = (0..self.num_envs())
+            .map(|e| {
+                let mut rng = EnvRng::new(seed, e as u32, streams::EPISODE_LENGTH);
+                ((u64::from(rng.next_u32()) * u64::from(max)) >> 32) as u32
+            })
+            .collect();
+        self.env.set_episode_length(&lengths)?;
+        Ok(())
+    }
+}

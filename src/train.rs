@@ -1,0 +1,289 @@
+//! The `train` and `play` workflows (Isaac Lab's `rsl_rl/train.py` and `play.py`): resolve the
+//! task's env and agent configs with overrides, make the run directory, train or replay.
+
+use std::path::{Path, PathBuf};
+
+use clap::Parser;
+use orbit_core::config::Node;
+use orbit_rl::burn::tensor::Device;
+use orbit_rl::run_dir::{new_run_dir, resolve_checkpoint};
+use orbit_rl::{OnPolicyRunner, Policy, RlError, RlVecEnv, RunnerCfg, VecEnv};
+
+/// The learning library whose configs `train` reads (`AgentCfgDef::library`).
+const LIBRARY: &str = "rsl_rl";
+
+/// Flags of `train` (Isaac Lab's names).
+#[derive(Parser, Debug, Clone)]
+pub struct TrainArgs {
+    /// Task id (see the `list_tasks` example).
+    #[arg(long, default_value = "BoxPushing-JointPos-Franka-v0")]
+    pub task: String,
+    /// Envs (default: the agent config's, else the task's), seed of the learner and the env
+    /// (default: the agent config's), physics backend.
+    #[command(flatten)]
+    pub env: crate::EnvArgs,
+    /// Training iterations (default: the agent config's).
+    #[arg(long)]
+    pub max_iterations: Option<usize>,
+    /// Continue from a checkpoint (see `--load-run`, `--checkpoint`).
+    #[arg(long)]
+    pub resume: bool,
+    /// Run directory to resume from: a regex matched at the start of the names under
+    /// `<log-root>/<experiment>/`; the last match (the newest run) is taken.
+    #[arg(long, default_value = ".*")]
+    pub load_run: String,
+    /// Checkpoint regex within the run (`model_<iteration>`); the highest iteration is taken.
+    #[arg(long, default_value = "model_.*")]
+    pub checkpoint: String,
+    /// Experiment name (the directory under the log root).
+    #[arg(long)]
+    pub experiment_name: Option<String>,
+    /// Suffix of the run directory.
+    #[arg(long)]
+    pub run_name: Option<String>,
+    /// Root of the run directories.
+    #[arg(long, default_value = "logs")]
+    pub log_root: PathBuf,
+    /// Config overrides: `env.<path>=<value>` for the env, `agent.<path>=<value>` for the runner
+    /// (e.g. `env.episode_length_s=4.0 agent.algorithm.learning_rate=3e-4`).
+    pub overrides: Vec<String>,
+}
+
+/// Flags of `play`.
+#[derive(Parser, Debug, Clone)]
+pub struct PlayArgs {
+    /// Task id.
+    #[arg(long, default_value = "BoxPushing-JointPos-Franka-v0")]
+    pub task: String,
+    /// Envs (default: the task's), seed and physics backend of the env.
+    #[command(flatten)]
+    pub env: crate::EnvArgs,
+    /// A checkpoint path (`…/model_<it>`, with or without extension); default: the newest run's
+    /// last checkpoint of the task's experiment.
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// Run directory regex used when no checkpoint path is given.
+    #[arg(long, default_value = ".*")]
+    pub load_run: String,
+    /// Root of the run directories.
+    #[arg(long, default_value = "logs")]
+    pub log_root: PathBuf,
+    /// Episodes to play per env.
+    #[arg(long, default_value_t = 1)]
+    pub episodes: usize,
+    /// Env overrides `env.<path>=<value>`.
+    pub overrides: Vec<String>,
+}
+
+/// The resolved configs of a run.
+pub struct ResolvedRun {
+    /// The runner config.
+    pub agent: RunnerCfg,
+    /// The agent config document (for `params/agent.ron`).
+    pub agent_doc: Node,
+    /// Overrides that turn the task's env config into this run's.
+    pub env_overrides: Vec<String>,
+}
+
+/// Splits `env.`/`agent.` overrides (a token without prefix is an env override).
+fn split_overrides(tokens: &[String]) -> (Vec<String>, Vec<String>) {
+    let (mut env, mut agent) = (Vec::new(), Vec::new());
+    for t in tokens {
+        if let Some(rest) = t.strip_prefix("agent.") {
+            agent.push(rest.to_string());
+        } else {
+            env.push(t.strip_prefix("env.").unwrap_or(t).to_string());
+        }
+    }
+    (env, agent)
+}
+
+/// Resolves the agent config of `args.task` with overrides and the CLI flags (which win over
+/// overrides, as in Isaac Lab), and the env overrides: the agent's `env_overrides`, then the
+/// user's, then `num_envs`, the seed (the agent's, as Isaac Lab's script copies it) and the
+/// backend.
+pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
+    crate::link_registrations();
+    let def = orbit_managers::agent_cfg(&args.task, LIBRARY).ok_or_else(|| {
+        RlError::EnvMismatch(format!(
+            "task `{}` has no `{LIBRARY}` training config; tasks with one: {:?}",
+            args.task,
+            orbit_managers::tasks()
+                .iter()
+                .filter(|t| orbit_managers::agent_cfg(t.id, LIBRARY).is_some())
+                .map(|t| t.id)
+                .collect::<Vec<_>>()
+        ))
+    })?;
+    let (user_env, mut agent_overrides) = split_overrides(&args.overrides);
+    if let Some(s) = args.env.seed {
+        agent_overrides.push(format!("seed={s}"));
+    }
+    if let Some(m) = args.max_iterations {
+        agent_overrides.push(format!("max_iterations={m}"));
+    }
+    if let Some(e) = &args.experiment_name {
+        agent_overrides.push(format!("experiment_name={e:?}"));
+    }
+    if let Some(r) = &args.run_name {
+        agent_overrides.push(format!("run_name={r:?}"));
+    }
+    let agent_doc =
+        orbit_core::config::parse_document(def.config, def.file_name, &agent_overrides)?;
+    let agent: RunnerCfg = orbit_core::config::from_node(&agent_doc)?;
+    agent.validate(def.file_name)?;
+    let mut env_overrides = agent.env_overrides.clone();
+    env_overrides.extend(user_env);
+    env_overrides.extend(crate::run_overrides(
+        args.env.num_envs,
+        Some(agent.seed),
+        args.env.backend.as_deref(),
+        &[],
+    ));
+    Ok(ResolvedRun {
+        agent,
+        agent_doc,
+        env_overrides,
+    })
+}
+
+/// Writes `params/env.ron` and `params/agent.ron` into the run directory.
+fn write_params(
+    dir: &Path,
+    task: &str,
+    run: &ResolvedRun,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let params = dir.join("params");
+    std::fs::create_dir_all(&params).map_err(RlError::io(&params))?;
+    let t = orbit_managers::tasks()
+        .into_iter()
+        .find(|t| t.id == task)
+        .expect("the env was built from this task");
+    let all: Vec<String> = t
+        .overrides
+        .iter()
+        .map(|s| s.to_string())
+        .chain(run.env_overrides.iter().cloned())
+        .collect();
+    let env_doc = orbit_core::config::parse_document(t.config, t.file_name, &all)?;
+    for (name, text) in [
+        ("env.ron", env_doc.to_ron()),
+        ("agent.ron", run.agent_doc.to_ron()),
+    ] {
+        let path = params.join(name);
+        std::fs::write(&path, text).map_err(RlError::io(path))?;
+    }
+    Ok(())
+}
+
+/// Trains `args.task` with PPO; returns the runner (its `history` holds every iteration).
+pub fn train(
+    args: &TrainArgs,
+    show_progress: bool,
+) -> Result<OnPolicyRunner<RlVecEnv>, Box<dyn std::error::Error>> {
+    let run = resolve(args)?;
+    let env = crate::make(&args.task, &run.env_overrides)?;
+    let cfg = run.agent.clone();
+    let dir = new_run_dir(&args.log_root, &cfg.experiment_name, &cfg.run_name);
+    let resume_from = if args.resume {
+        Some(resolve_checkpoint(
+            &args.log_root.join(&cfg.experiment_name),
+            &args.load_run,
+            &args.checkpoint,
+        )?)
+    } else {
+        None
+    };
+    std::fs::create_dir_all(&dir).map_err(RlError::io(&dir))?;
+    write_params(&dir, &args.task, &run)?;
+    let vec_env = RlVecEnv::new(env)?;
+    println!(
+        "{}: {} envs × {} steps per iteration, {} iterations; run directory {}",
+        args.task,
+        vec_env.num_envs(),
+        cfg.num_steps_per_env,
+        cfg.max_iterations,
+        dir.display()
+    );
+    let iterations = cfg.max_iterations;
+    let mut runner = OnPolicyRunner::new(vec_env, cfg, Some(dir), Device::flex())?;
+    if let Some(base) = resume_from {
+        println!("resuming from {}", base.display());
+        runner.load_checkpoint(&base)?;
+    }
+    runner.show_progress = show_progress;
+    runner.learn(iterations)?;
+    if let Some(dir) = runner.log_dir() {
+        orbit_rl::plot::write_training_curves(
+            dir,
+            &runner.history,
+            runner.cfg.success_metric.is_some(),
+        )?;
+    }
+    Ok(runner)
+}
+
+/// Replays a trained policy (mean actions) and prints each finished episode's return and
+/// success metric.
+pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
+    crate::link_registrations();
+    let (env_overrides, _) = split_overrides(&args.overrides);
+    let base = match &args.checkpoint {
+        Some(p) => p.with_extension(""),
+        None => {
+            let def = orbit_managers::agent_cfg(&args.task, LIBRARY).ok_or_else(|| {
+                RlError::EnvMismatch(format!(
+                    "task `{}` has no training config; pass --checkpoint",
+                    args.task
+                ))
+            })?;
+            let agent = RunnerCfg::from_ron(def.config, def.file_name, &[])?;
+            resolve_checkpoint(
+                &args.log_root.join(&agent.experiment_name),
+                &args.load_run,
+                "model_.*",
+            )?
+        }
+    };
+    let policy = Policy::load(&base, Device::flex())?;
+    let e = &args.env;
+    let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &env_overrides);
+    let mut env = RlVecEnv::new(crate::make(&args.task, &overrides)?)?;
+    if env.num_obs() != policy.num_obs() {
+        return Err(RlError::EnvMismatch(format!(
+            "the policy expects {} observations, the env gives {}",
+            policy.num_obs(),
+            env.num_obs()
+        ))
+        .into());
+    }
+    println!("playing {} with {}", args.task, base.display());
+    let n = env.num_envs();
+    let mut returns = vec![0.0f32; n];
+    let mut finished = vec![0usize; n];
+    while finished.iter().any(|&f| f < args.episodes) {
+        let actions = policy.act(env.observations());
+        let step = env.step(&actions)?;
+        let mut any = false;
+        for e in 0..n {
+            returns[e] += step.rewards[e];
+            if step.dones[e] {
+                if finished[e] < args.episodes {
+                    println!(
+                        "env {e:>4}: episode {} return {:>9.3}",
+                        finished[e], returns[e]
+                    );
+                    any = true;
+                }
+                finished[e] += 1;
+                returns[e] = 0.0;
+            }
+        }
+        if any {
+            for (key, value) in step.log {
+                println!("    {key}: {value:.4}");
+            }
+        }
+    }
+    Ok(())
+}
