@@ -51,8 +51,13 @@ pub struct Ppo {
     updates: u32,
 }
 
+/// Adam with PyTorch's ε (burn's default is 1e-5).
+fn adam() -> ModuleOptimizer {
+    AdamConfig::new().with_epsilon(1e-8).init()
+}
+
 /// A `[rows, cols]` tensor from row-major values.
-fn tensor2(values: Vec<f32>, rows: usize, cols: usize, device: &Device) -> Tensor<2> {
+pub(crate) fn tensor2(values: Vec<f32>, rows: usize, cols: usize, device: &Device) -> Tensor<2> {
     Tensor::from_data(TensorData::new(values, [rows, cols]), device)
 }
 
@@ -91,7 +96,7 @@ impl Ppo {
         device: Device,
     ) -> Self {
         let (num_obs, num_critic_obs, num_actions) = dims;
-        let optimizer = AdamConfig::new().with_epsilon(1e-8).init();
+        let optimizer = adam();
         let noise = (0..num_envs)
             .map(|e| EnvRng::new(seed, e as u32, streams::ACTION_NOISE))
             .collect();
@@ -224,15 +229,14 @@ impl Ppo {
         }
         self.updates += 1;
         let mut totals = LossStats::default();
-        let mut batch = Minibatch::default();
         for _ in 0..cfg.num_learning_epochs {
             for k in 0..cfg.num_mini_batches {
-                batch.gather(
+                let batch = Minibatch::gather(
                     &self.storage,
                     &perm[k * m..(k + 1) * m],
                     cfg.normalize_advantage_per_mini_batch,
                 );
-                let stats = self.step_minibatch(&batch)?;
+                let stats = self.step_minibatch(batch)?;
                 totals.value += stats.value;
                 totals.surrogate += stats.surrogate;
                 totals.entropy += stats.entropy;
@@ -249,20 +253,20 @@ impl Ppo {
 
     /// The losses of a minibatch under the current network, and the KL divergence from the
     /// sampling policy (a plain number; it steers the adaptive learning rate).
-    fn minibatch_losses(&self, mb: &Minibatch) -> MinibatchLosses {
+    fn minibatch_losses(&self, mb: Minibatch) -> MinibatchLosses {
         let cfg = &self.cfg;
         let s = &self.storage;
         let (rows, na) = (mb.advantages.len(), s.num_actions);
         let d = &self.device;
-        let obs = tensor2(mb.obs.clone(), rows, s.num_obs, d);
-        let critic_obs = tensor2(mb.critic_obs.clone(), rows, s.num_critic_obs, d);
-        let actions = tensor2(mb.actions.clone(), rows, na, d);
-        let old_mu = tensor2(mb.mu.clone(), rows, na, d);
+        let obs = tensor2(mb.obs, rows, s.num_obs, d);
+        let critic_obs = tensor2(mb.critic_obs, rows, s.num_critic_obs, d);
+        let actions = tensor2(mb.actions, rows, na, d);
+        let old_mu = tensor2(mb.mu, rows, na, d);
         let old_sigma = tensor1(s.sigma.clone(), d).reshape([1, na]);
-        let old_log_prob = tensor1(mb.log_prob.clone(), d);
-        let advantages = tensor1(mb.advantages.clone(), d);
-        let returns = tensor1(mb.returns.clone(), d);
-        let old_values = tensor1(mb.values.clone(), d);
+        let old_log_prob = tensor1(mb.log_prob, d);
+        let advantages = tensor1(mb.advantages, d);
+        let returns = tensor1(mb.returns, d);
+        let old_values = tensor1(mb.values, d);
 
         let mu = self.model.action_mean(obs);
         let sigma = self.model.action_std().reshape([1, na]);
@@ -315,7 +319,7 @@ impl Ppo {
         }
     }
 
-    fn step_minibatch(&mut self, mb: &Minibatch) -> Result<LossStats, RlError> {
+    fn step_minibatch(&mut self, mb: Minibatch) -> Result<LossStats, RlError> {
         let l = self.minibatch_losses(mb);
         let cfg = &self.cfg;
         if cfg.schedule == Schedule::Adaptive {
@@ -369,8 +373,7 @@ impl Ppo {
         self.rollout_model = None;
         if with_optimizer {
             let path = base.with_extension("optim.bpk");
-            let fresh = AdamConfig::new().with_epsilon(1e-8).init();
-            self.optimizer = fresh.load(&path).map_err(|e| RlError::Checkpoint {
+            self.optimizer = adam().load(&path).map_err(|e| RlError::Checkpoint {
                 path,
                 message: e.to_string(),
             })?;
@@ -439,8 +442,7 @@ struct MinibatchLosses {
     entropy: Tensor<1>,
 }
 
-/// The rows of one minibatch, gathered from the storage.
-#[derive(Default)]
+/// The rows of one minibatch, gathered from the storage (moved into tensors afterwards).
 struct Minibatch {
     obs: Vec<f32>,
     critic_obs: Vec<f32>,
@@ -453,24 +455,28 @@ struct Minibatch {
 }
 
 impl Minibatch {
-    fn gather(&mut self, s: &RolloutStorage, idx: &[usize], normalize: bool) {
-        fn rows(dst: &mut Vec<f32>, src: &[f32], dim: usize, idx: &[usize]) {
-            dst.clear();
+    fn gather(s: &RolloutStorage, idx: &[usize], normalize: bool) -> Self {
+        let rows = |src: &[f32], dim: usize| -> Vec<f32> {
+            let mut dst = Vec::with_capacity(idx.len() * dim);
             for &i in idx {
                 dst.extend_from_slice(&src[i * dim..(i + 1) * dim]);
             }
-        }
-        rows(&mut self.obs, &s.obs, s.num_obs, idx);
-        rows(&mut self.critic_obs, &s.critic_obs, s.num_critic_obs, idx);
-        rows(&mut self.actions, &s.actions, s.num_actions, idx);
-        rows(&mut self.mu, &s.mu, s.num_actions, idx);
-        rows(&mut self.log_prob, &s.actions_log_prob, 1, idx);
-        rows(&mut self.advantages, &s.advantages, 1, idx);
-        rows(&mut self.returns, &s.returns, 1, idx);
-        rows(&mut self.values, &s.values, 1, idx);
+            dst
+        };
+        let mut mb = Self {
+            obs: rows(&s.obs, s.num_obs),
+            critic_obs: rows(&s.critic_obs, s.num_critic_obs),
+            actions: rows(&s.actions, s.num_actions),
+            mu: rows(&s.mu, s.num_actions),
+            log_prob: rows(&s.actions_log_prob, 1),
+            advantages: rows(&s.advantages, 1),
+            returns: rows(&s.returns, 1),
+            values: rows(&s.values, 1),
+        };
         if normalize {
-            storage::normalize(&mut self.advantages);
+            storage::normalize(&mut mb.advantages);
         }
+        mb
     }
 }
 
@@ -510,9 +516,7 @@ mod tests {
     /// The whole rollout as one minibatch.
     fn whole_rollout(p: &Ppo) -> Minibatch {
         let all: Vec<usize> = (0..p.storage.batch_size()).collect();
-        let mut mb = Minibatch::default();
-        mb.gather(&p.storage, &all, false);
-        mb
+        Minibatch::gather(&p.storage, &all, false)
     }
 
     /// Fills the storage with a rollout on synthetic observations and rewards.
@@ -537,7 +541,7 @@ mod tests {
     fn first_minibatch_sees_the_sampling_policy() {
         let mut p = ppo(16, 4);
         rollout(&mut p);
-        let l = p.minibatch_losses(&whole_rollout(&p));
+        let l = p.minibatch_losses(whole_rollout(&p));
         let floor = 2.0 * (1.0f32 + 1e-5).ln();
         assert!((l.kl - floor).abs() < 1e-6, "kl {}", l.kl);
         let surrogate = l.surrogate.into_scalar::<f32>();
@@ -560,7 +564,7 @@ mod tests {
     fn gradient_norm_is_clipped_globally() {
         let mut p = ppo(16, 4);
         rollout(&mut p);
-        let l = p.minibatch_losses(&whole_rollout(&p));
+        let l = p.minibatch_losses(whole_rollout(&p));
         let loss = l.surrogate + l.value.mul_scalar(100.0);
         let mut grads = GradientsParams::from_grads(loss.backward(), &p.model);
         clip_grad_norm(&p.model, &mut grads, 1e-3);

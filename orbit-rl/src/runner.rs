@@ -14,7 +14,7 @@ use crate::cfg::{PolicyCfg, RunnerCfg};
 use crate::logger::ScalarLog;
 use crate::model::ActorCritic;
 use crate::normalizer::EmpiricalNormalizer;
-use crate::ppo::{LossStats, Ppo, values};
+use crate::ppo::{LossStats, Ppo, tensor2, values};
 use crate::vec_env::VecEnv;
 
 /// Rows after which the observation statistics freeze (RSL-RL's `until`).
@@ -412,10 +412,7 @@ impl Policy {
             n.normalize(&mut x);
         }
         let rows = x.len() / self.num_obs;
-        let t = burn::tensor::Tensor::from_data(
-            burn::tensor::TensorData::new(x, [rows, self.num_obs]),
-            &self.device,
-        );
+        let t = tensor2(x, rows, self.num_obs, &self.device);
         let a = values(self.model.action_mean(t));
         debug_assert_eq!(a.len(), rows * self.num_actions);
         a
