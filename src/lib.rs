@@ -69,4 +69,5 @@ pub fn run_overrides(
 }
 
 pub mod agent;
+pub mod learner;
 pub mod train;

@@ -22,6 +22,9 @@ pub struct TrainArgs {
     /// (default: the agent config's), physics backend.
     #[command(flatten)]
     pub env: crate::EnvArgs,
+    /// Device of the learner: `cpu` or `gpu` (default: the agent config's `device`).
+    #[arg(long, value_parser = ["cpu", "gpu"])]
+    pub rl_device: Option<String>,
     /// Training iterations (default: the agent config's).
     #[arg(long)]
     pub max_iterations: Option<usize>,
@@ -119,6 +122,10 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     if let Some(s) = args.env.seed {
         agent_overrides.push(format!("seed={s}"));
     }
+    if let Some(d) = &args.rl_device {
+        let variant = if d == "gpu" { "Gpu" } else { "Cpu" };
+        agent_overrides.push(format!("device={variant}"));
+    }
     if let Some(m) = args.max_iterations {
         agent_overrides.push(format!("max_iterations={m}"));
     }
@@ -206,7 +213,8 @@ pub fn train(
         dir.display()
     );
     let iterations = cfg.max_iterations;
-    let mut runner = OnPolicyRunner::new(vec_env, cfg, Some(dir), Device::flex())?;
+    let device = crate::learner::learner_device(cfg.device)?;
+    let mut runner = OnPolicyRunner::new(vec_env, cfg, Some(dir), device)?;
     if let Some(base) = resume_from {
         println!("resuming from {}", base.display());
         runner.load_checkpoint(&base)?;

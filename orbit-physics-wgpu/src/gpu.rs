@@ -5,8 +5,13 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// A wgpu device and its queue.
+/// A wgpu device and its queue, with the instance and adapter they came from (so another wgpu
+/// user, such as burn's learner, can share the device).
 pub struct Gpu {
+    /// The instance.
+    pub instance: wgpu::Instance,
+    /// The adapter (the physical device).
+    pub adapter: wgpu::Adapter,
     /// The device.
     pub device: wgpu::Device,
     /// Its queue.
@@ -79,7 +84,14 @@ async fn create() -> Result<Gpu, String> {
     let (device, queue) = adapter
         .request_device(&wgpu::DeviceDescriptor {
             label: Some("orbit-physics-wgpu"),
-            required_features: wgpu::Features::empty(),
+            // Every stable feature the adapter has, so burn's learner can share the device and
+            // pick its WGSL kernels by what the adapter reports (as cubecl asks for). Left out:
+            // mappable primary buffers (they slow ordinary buffers on discrete GPUs) and
+            // wgpu's experimental features (they need an unsafe opt-in, and WGSL kernels do
+            // not use them).
+            required_features: adapter.features().difference(
+                wgpu::Features::MAPPABLE_PRIMARY_BUFFERS | wgpu::Features::all_experimental_mask(),
+            ),
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -89,6 +101,8 @@ async fn create() -> Result<Gpu, String> {
         .map_err(|e| format!("the Vulkan adapter `{}` refused a device: {e}", info.name))?;
     tracing::info!(adapter = %info.name, driver = %info.driver, "wgpu physics device");
     Ok(Gpu {
+        instance,
+        adapter,
         device,
         queue,
         info,

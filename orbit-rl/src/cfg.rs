@@ -11,6 +11,9 @@ pub struct RunnerCfg {
     /// in Isaac Lab's training script, of the env.
     #[serde(default = "default_seed")]
     pub seed: u64,
+    /// Where the network is evaluated and trained (RSL-RL's `device`).
+    #[serde(default)]
+    pub device: LearnerDevice,
     /// Env steps per env collected per iteration.
     pub num_steps_per_env: usize,
     /// Iterations of `learn`.
@@ -41,6 +44,17 @@ pub struct RunnerCfg {
     pub policy: PolicyCfg,
     /// The PPO algorithm.
     pub algorithm: PpoCfg,
+}
+
+/// Where the learner runs.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+pub enum LearnerDevice {
+    /// burn's pure-Rust CPU backend (flex), multi-threaded.
+    #[default]
+    Cpu,
+    /// burn's wgpu backend, on the same Vulkan device as the wgpu physics backend (needs a
+    /// build with the `gpu-learner` feature).
+    Gpu,
 }
 
 /// Actor-critic network config (RSL-RL's `ActorCritic`).

@@ -48,9 +48,12 @@ pub enum RlError {
         /// What went wrong.
         message: String,
     },
+    /// The learner's device could not be opened.
+    #[error("learner device: {0}")]
+    Device(String),
     /// Training produced a non-finite number (the loss or the policy's output).
     #[error("training diverged: {0} is not finite; lower the learning rate or check the rewards")]
-    NonFinite(&'static str),
+    NonFinite(String),
 }
 
 impl RlError {

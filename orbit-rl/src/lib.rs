@@ -21,10 +21,11 @@ mod progress;
 pub mod run_dir;
 pub mod runner;
 pub mod storage;
+pub mod tensorboard;
 pub mod vec_env;
 
 pub use burn;
-pub use cfg::RunnerCfg;
+pub use cfg::{LearnerDevice, RunnerCfg};
 pub use error::RlError;
 pub use runner::{IterationLog, OnPolicyRunner, Policy};
 pub use vec_env::{RlVecEnv, VecEnv, VecEnvStep};

@@ -1,4 +1,5 @@
-//! The scalars file of a run: one CSV row per value, TensorBoard's tag names (spec §6.5).
+//! The scalars of a run under RSL-RL's TensorBoard tag names (spec §6.5): `scalars.csv`, one
+//! row per value, and a TensorBoard event file.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -6,20 +7,25 @@ use std::path::{Path, PathBuf};
 
 use crate::RlError;
 use crate::runner::IterationLog;
+use crate::tensorboard::EventWriter;
 
-/// `scalars.csv`: `iteration,env_steps,wall_time,tag,value`, flushed after every iteration.
+/// `scalars.csv` (`iteration,env_steps,wall_time,tag,value`) and `events.out.tfevents.*`
+/// (step = iteration), both flushed after every iteration.
 pub struct ScalarLog {
     path: PathBuf,
     out: BufWriter<File>,
+    events: EventWriter,
 }
 
 impl ScalarLog {
-    /// Creates (or truncates) the file and writes the header.
-    pub fn create(path: &Path) -> Result<Self, RlError> {
-        let file = File::create(path).map_err(RlError::io(path))?;
+    /// Creates (or truncates) `dir/scalars.csv`, writes its header, and starts an event file.
+    pub fn create(dir: &Path) -> Result<Self, RlError> {
+        let path = dir.join("scalars.csv");
+        let file = File::create(&path).map_err(RlError::io(&path))?;
         let mut log = Self {
-            path: path.to_path_buf(),
+            path,
             out: BufWriter::new(file),
+            events: EventWriter::create(dir)?,
         };
         log.line(format_args!("iteration,env_steps,wall_time,tag,value"))?;
         Ok(log)
@@ -31,11 +37,17 @@ impl ScalarLog {
 
     /// Appends one iteration's scalars.
     pub fn write(&mut self, log: &IterationLog) -> Result<(), RlError> {
-        for (tag, value) in scalars(log) {
+        let scalars = scalars(log);
+        for (tag, value) in &scalars {
             let (it, steps, t) = (log.iteration, log.env_steps, log.wall_time);
             self.line(format_args!("{it},{steps},{t:.3},{tag},{value}"))?;
         }
-        self.out.flush().map_err(RlError::io(&self.path))
+        self.out.flush().map_err(RlError::io(&self.path))?;
+        self.events.add_scalars(
+            log.iteration as u64,
+            scalars.iter().map(|(tag, v)| (tag.as_str(), *v as f32)),
+        )?;
+        self.events.flush()
     }
 }
 

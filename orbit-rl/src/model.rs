@@ -47,8 +47,8 @@ impl Mlp {
             x = layer.forward(x);
             if i < last {
                 x = match self.activation {
-                    Activation::Elu => activation::elu(x, 1.0),
-                    Activation::Selu => activation::selu(x),
+                    Activation::Elu => elu(x, 1.0, 1.0),
+                    Activation::Selu => elu(x, SELU_SCALE, SELU_SCALE * SELU_ALPHA),
                     Activation::Relu => activation::relu(x),
                     Activation::Lrelu => activation::leaky_relu(x, 0.01),
                     Activation::Tanh => activation::tanh(x),
@@ -58,6 +58,21 @@ impl Mlp {
         }
         x
     }
+}
+
+/// SELU's constants (Klambauer et al. 2017, as in PyTorch).
+const SELU_ALPHA: f64 = 1.673_263_242_354_377_3;
+const SELU_SCALE: f64 = 1.050_700_987_355_480_5;
+
+/// `scale·x` for `x > 0`, `alpha·(eˣ − 1)` otherwise (ELU with `scale = alpha = 1`, SELU with
+/// its constants), written as `scale·max(x, 0) + alpha·(e^min(x, 0) − 1)`. burn's own ELU and
+/// SELU take `eˣ` of every element and mask it out where `x > 0`; for `x > 88` that is ∞ in
+/// `f32`, and the backward pass multiplies the masked-out zero gradient by it: NaN weights
+/// once a pre-activation passes 88.
+fn elu(x: Tensor<2>, scale: f64, alpha: f64) -> Tensor<2> {
+    let positive = x.clone().clamp_min(0.0).mul_scalar(scale);
+    let negative = x.clamp_max(0.0).exp().sub_scalar(1.0).mul_scalar(alpha);
+    positive + negative
 }
 
 /// Actor (Gaussian mean), critic (value) and the per-action noise parameter.
@@ -137,5 +152,27 @@ impl ActorCritic {
             NoiseStdType::Scalar => self.std.val().clamp_min(1e-6),
             NoiseStdType::Log => self.std.val().exp(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// ELU's gradient is 1 for a large positive input and e^x for a negative one; neither is
+    /// NaN, even where eˣ overflows `f32`.
+    #[test]
+    fn elu_gradient_is_finite_for_large_inputs() {
+        let device = Device::flex().autodiff();
+        let x = Tensor::<2>::from_data(TensorData::new(vec![100.0f32, -2.0], [1, 2]), &device)
+            .require_grad();
+        let y = elu(x.clone(), 1.0, 1.0);
+        let out: Vec<f32> = y.clone().into_data().try_into_vec().unwrap();
+        assert_eq!(out[0], 100.0);
+        assert!((out[1] - ((-2.0f32).exp() - 1.0)).abs() < 1e-6);
+        let grads = y.sum().backward();
+        let g: Vec<f32> = x.grad(&grads).unwrap().into_data().try_into_vec().unwrap();
+        assert_eq!(g[0], 1.0);
+        assert!((g[1] - (-2.0f32).exp()).abs() < 1e-6, "{g:?}");
     }
 }

@@ -149,7 +149,7 @@ impl Ppo {
         let mu = values(model.action_mean(tensor2(obs.to_vec(), n, no, &device)));
         let value = values(model.value(tensor2(critic_obs.to_vec(), n, nc, &device)));
         if mu.iter().chain(&value).any(|v| !v.is_finite()) {
-            return Err(RlError::NonFinite("the policy's output"));
+            return Err(RlError::NonFinite("the policy's output".into()));
         }
         let sigma = &self.sigma;
         let s = &mut self.storage;
@@ -293,8 +293,7 @@ impl Ppo {
                 .div(sigma_d.powi_scalar(2).mul_scalar(2.0)))
         .sub_scalar(0.5)
         .sum_dim(1)
-        .mean()
-        .into_scalar::<f32>();
+        .mean();
 
         let ratio = (log_prob - old_log_prob).exp();
         let eps = cfg.clip_param;
@@ -322,29 +321,53 @@ impl Ppo {
     fn step_minibatch(&mut self, mb: Minibatch) -> Result<LossStats, RlError> {
         let l = self.minibatch_losses(mb);
         let cfg = &self.cfg;
+        let loss = l.surrogate.clone() + l.value.clone().mul_scalar(cfg.value_loss_coef)
+            - l.entropy.clone().mul_scalar(cfg.entropy_coef);
+        let mut grads = GradientsParams::from_grads(loss.backward(), &self.model);
+        // One readback per minibatch (a GPU learner waits for each): the KL, the three
+        // losses and the squared gradient norm.
+        let read = values(Tensor::cat(
+            vec![
+                l.kl,
+                l.value.detach(),
+                l.surrogate.detach(),
+                l.entropy.detach(),
+                grad_norm_squared(&self.model, &grads),
+            ],
+            0,
+        ));
+        let [kl, value, surrogate, entropy, norm_squared] = read[..] else {
+            unreachable!("five scalars were concatenated")
+        };
+        if !(value.is_finite() && surrogate.is_finite()) {
+            return Err(RlError::NonFinite(format!(
+                "the PPO loss (value {value}, surrogate {surrogate}, KL {kl}, learning rate \
+                 {:.2e}; rollout {})",
+                self.learning_rate,
+                self.storage.extremes()
+            )));
+        }
         if cfg.schedule == Schedule::Adaptive {
             let desired = cfg.desired_kl;
-            if l.kl > 2.0 * desired {
+            if kl > 2.0 * desired {
                 self.learning_rate = (self.learning_rate / 1.5).max(1e-5);
-            } else if l.kl > 0.0 && l.kl < desired / 2.0 {
+            } else if kl > 0.0 && kl < desired / 2.0 {
                 self.learning_rate = (self.learning_rate * 1.5).min(1e-2);
             }
         }
-        let loss = l.surrogate.clone() + l.value.clone().mul_scalar(cfg.value_loss_coef)
-            - l.entropy.clone().mul_scalar(cfg.entropy_coef);
-        let stats = LossStats {
-            value: l.value.into_scalar::<f32>(),
-            surrogate: l.surrogate.into_scalar::<f32>(),
-            entropy: l.entropy.into_scalar::<f32>(),
-        };
-        if !(stats.value.is_finite() && stats.surrogate.is_finite()) {
-            return Err(RlError::NonFinite("the PPO loss"));
-        }
-        let mut grads = GradientsParams::from_grads(loss.backward(), &self.model);
-        clip_grad_norm(&self.model, &mut grads, cfg.max_grad_norm);
+        clip_grad_norm(
+            &self.model,
+            &mut grads,
+            norm_squared.sqrt(),
+            cfg.max_grad_norm,
+        );
         let model = self.model.clone();
         self.model = self.optimizer.step(self.learning_rate, model, grads);
-        Ok(stats)
+        Ok(LossStats {
+            value,
+            surrogate,
+            entropy,
+        })
     }
 
     /// Saves the network and the optimiser state as burnpack files `<base>.bpk` and
@@ -391,9 +414,8 @@ pub fn load_model(model: ActorCritic, base: &Path) -> Result<ActorCritic, RlErro
     })
 }
 
-/// Scales all gradients by `max_norm / (‖g‖ + 1e-6)` when the global norm `‖g‖` over every
-/// parameter exceeds `max_norm` (`torch.nn.utils.clip_grad_norm_`).
-fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, max_norm: f32) {
+/// The squared global norm of the gradients, `Σ‖g‖²` over every parameter (shape `[1]`).
+fn grad_norm_squared(model: &ActorCritic, grads: &GradientsParams) -> Tensor<1> {
     struct SquaredNorm<'a> {
         grads: &'a GradientsParams,
         total: Option<Tensor<1>>,
@@ -409,6 +431,14 @@ fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, max_norm: f3
             }
         }
     }
+    let mut norm = SquaredNorm { grads, total: None };
+    model.visit(&mut norm);
+    norm.total.expect("the actor-critic has parameters")
+}
+
+/// Scales all gradients by `max_norm / (norm + 1e-6)` when their global norm `norm` exceeds
+/// `max_norm` (`torch.nn.utils.clip_grad_norm_`).
+fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, norm: f32, max_norm: f32) {
     struct Scale<'a> {
         grads: &'a mut GradientsParams,
         factor: f32,
@@ -420,10 +450,6 @@ fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, max_norm: f3
             }
         }
     }
-    let mut norm = SquaredNorm { grads, total: None };
-    model.visit(&mut norm);
-    let Some(total) = norm.total else { return };
-    let norm = total.into_scalar::<f32>().sqrt();
     let factor = max_norm / (norm + 1e-6);
     if factor < 1.0 {
         model.visit(&mut Scale { grads, factor });
@@ -432,8 +458,8 @@ fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, max_norm: f3
 
 /// The loss terms of one minibatch.
 struct MinibatchLosses {
-    /// Mean KL divergence from the sampling policy.
-    kl: f32,
+    /// Mean KL divergence from the sampling policy (shape `[1]`, no gradient).
+    kl: Tensor<1>,
     /// Clipped surrogate loss.
     surrogate: Tensor<1>,
     /// (Clipped) value loss.
@@ -543,7 +569,8 @@ mod tests {
         rollout(&mut p);
         let l = p.minibatch_losses(whole_rollout(&p));
         let floor = 2.0 * (1.0f32 + 1e-5).ln();
-        assert!((l.kl - floor).abs() < 1e-6, "kl {}", l.kl);
+        let kl = l.kl.into_scalar::<f32>();
+        assert!((kl - floor).abs() < 1e-6, "kl {kl}");
         let surrogate = l.surrogate.into_scalar::<f32>();
         assert!(surrogate.abs() < 1e-5, "surrogate {surrogate}");
         // Entropy of N(·, 0.7²) in 2 dimensions: 2·(0.5 + 0.5 ln 2π + ln 0.7).
@@ -567,7 +594,10 @@ mod tests {
         let l = p.minibatch_losses(whole_rollout(&p));
         let loss = l.surrogate + l.value.mul_scalar(100.0);
         let mut grads = GradientsParams::from_grads(loss.backward(), &p.model);
-        clip_grad_norm(&p.model, &mut grads, 1e-3);
+        let norm = grad_norm_squared(&p.model, &grads)
+            .into_scalar::<f32>()
+            .sqrt();
+        clip_grad_norm(&p.model, &mut grads, norm, 1e-3);
         struct Norm<'a>(&'a GradientsParams, f32);
         impl ModuleVisitor for Norm<'_> {
             fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {

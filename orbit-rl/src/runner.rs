@@ -90,6 +90,9 @@ pub struct OnPolicyRunner<E: VecEnv> {
     pub alg: Ppo,
     obs_normalizer: Option<EmpiricalNormalizer>,
     critic_normalizer: Option<EmpiricalNormalizer>,
+    /// The current (normalised) observations of the actor and the critic.
+    obs: Vec<f32>,
+    critic_obs: Vec<f32>,
     log_dir: Option<PathBuf>,
     scalars: Option<ScalarLog>,
     /// Iterations done (the next iteration's index).
@@ -143,13 +146,15 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         let scalars = match &log_dir {
             Some(dir) => {
                 std::fs::create_dir_all(dir).map_err(RlError::io(dir))?;
-                Some(ScalarLog::create(&dir.join("scalars.csv"))?)
+                Some(ScalarLog::create(dir)?)
             }
             None => None,
         };
         Ok(Self {
             obs_normalizer: normalizers.then(|| EmpiricalNormalizer::new(no, NORMALIZER_UNTIL)),
             critic_normalizer: normalizers.then(|| EmpiricalNormalizer::new(nc, NORMALIZER_UNTIL)),
+            obs: vec![0.0; n * no],
+            critic_obs: vec![0.0; n * nc],
             env,
             cfg,
             alg,
@@ -173,13 +178,28 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         self.log_dir.as_deref()
     }
 
-    /// Current observations, normalised (and, in training, folded into the statistics).
-    fn observe(&mut self, update: bool) -> (Vec<f32>, Vec<f32>) {
-        let mut obs = self.env.observations().to_vec();
-        let mut critic = self.env.critic_observations().to_vec();
+    /// Copies the env's current observations into `obs`/`critic_obs`, normalised (and, in
+    /// training, folded into the statistics).
+    fn observe(&mut self, update: bool) -> Result<(), RlError> {
+        self.obs.copy_from_slice(self.env.observations());
+        self.critic_obs
+            .copy_from_slice(self.env.critic_observations());
+        for (name, x, dim) in [
+            ("policy", &self.obs, self.env.num_obs()),
+            ("critic", &self.critic_obs, self.env.num_critic_obs()),
+        ] {
+            if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+                return Err(RlError::NonFinite(format!(
+                    "env {}'s {name} observation {} ({})",
+                    i / dim,
+                    i % dim,
+                    x[i]
+                )));
+            }
+        }
         for (norm, x) in [
-            (&mut self.obs_normalizer, &mut obs),
-            (&mut self.critic_normalizer, &mut critic),
+            (&mut self.obs_normalizer, &mut self.obs),
+            (&mut self.critic_normalizer, &mut self.critic_obs),
         ] {
             if let Some(n) = norm {
                 if update {
@@ -188,7 +208,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 n.normalize(x);
             }
         }
-        (obs, critic)
+        Ok(())
     }
 
     /// Runs `num_iterations` iterations (continuing the numbering of a resumed run), saving a
@@ -203,7 +223,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             .show_progress
             .then(|| crate::progress::bar(num_iterations as u64));
         let mut actions = vec![0.0f32; n * na];
-        let (mut obs, mut critic) = self.observe(true);
+        self.observe(true)?;
         let end = self.iteration + num_iterations;
         while self.iteration < end {
             let it = self.iteration;
@@ -211,7 +231,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let mut success = (0.0f64, 0usize);
             let mut episode: BTreeMap<String, (f64, usize)> = BTreeMap::new();
             for _ in 0..t_steps {
-                self.alg.act(&obs, &critic, &mut actions)?;
+                self.alg.act(&self.obs, &self.critic_obs, &mut actions)?;
                 let step = self.env.step(&actions)?;
                 self.alg
                     .process_env_step(step.rewards, step.dones, step.time_outs);
@@ -230,6 +250,12 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                     success.1 += 1;
                 }
                 for e in 0..n {
+                    if !step.rewards[e].is_finite() {
+                        return Err(RlError::NonFinite(format!(
+                            "env {e}'s reward ({})",
+                            step.rewards[e]
+                        )));
+                    }
                     self.current_return[e] += step.rewards[e];
                     self.current_length[e] += 1;
                     if step.dones[e] {
@@ -243,9 +269,9 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                         self.current_length[e] = 0;
                     }
                 }
-                (obs, critic) = self.observe(true);
+                self.observe(true)?;
             }
-            self.alg.compute_returns(&critic);
+            self.alg.compute_returns(&self.critic_obs);
             let collection_time = start.elapsed().as_secs_f64();
             let learn_start = Instant::now();
             let losses = self.alg.update()?;

@@ -40,6 +40,30 @@ pub struct RolloutStorage {
 }
 
 impl RolloutStorage {
+    /// The largest magnitudes in the rollout (observations, rewards, returns, action means)
+    /// and the smallest noise std, for diagnosing a diverged update.
+    pub fn extremes(&self) -> String {
+        // NaN wins (f32::max would drop it).
+        let max_abs = |v: &[f32]| {
+            v.iter().fold(0.0f32, |m, x| {
+                if m.is_nan() || x.is_nan() {
+                    f32::NAN
+                } else {
+                    m.max(x.abs())
+                }
+            })
+        };
+        let min_sigma = self.sigma.iter().fold(f32::INFINITY, |m, &x| m.min(x));
+        format!(
+            "max |obs| {:.3e}, max |reward| {:.3e}, max |return| {:.3e}, max |mean action| \
+             {:.3e}, min σ {min_sigma:.3e}",
+            max_abs(&self.obs),
+            max_abs(&self.rewards),
+            max_abs(&self.returns),
+            max_abs(&self.mu)
+        )
+    }
+
     /// Zeroed storage for `num_steps × num_envs` transitions.
     pub fn new(
         num_steps: usize,
