@@ -86,11 +86,13 @@ impl ProMp {
         }
         positive("tau", cfg.tau)?;
         positive("dt", cfg.dt)?;
-        if !cfg.delay.is_finite() || !cfg.weights_scale.is_finite() {
-            return Err(MpError::InvalidConfig {
-                field: "delay/weights_scale",
-                message: "expected finite numbers".into(),
-            });
+        for (field, v) in [("delay", cfg.delay), ("weights_scale", cfg.weights_scale)] {
+            if !v.is_finite() {
+                return Err(MpError::InvalidConfig {
+                    field,
+                    message: format!("expected a finite number, got {v}"),
+                });
+            }
         }
         let basis = ZeroPaddedRbf::new(
             cfg.num_basis,

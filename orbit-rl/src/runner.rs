@@ -184,19 +184,12 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         self.obs.copy_from_slice(self.env.observations());
         self.critic_obs
             .copy_from_slice(self.env.critic_observations());
-        for (name, x, dim) in [
-            ("policy", &self.obs, self.env.num_obs()),
-            ("critic", &self.critic_obs, self.env.num_critic_obs()),
-        ] {
-            if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-                return Err(RlError::NonFinite(format!(
-                    "env {}'s {name} observation {} ({})",
-                    i / dim,
-                    i % dim,
-                    x[i]
-                )));
-            }
-        }
+        check_finite("policy observation", &self.obs, self.env.num_obs())?;
+        check_finite(
+            "critic observation",
+            &self.critic_obs,
+            self.env.num_critic_obs(),
+        )?;
         for (norm, x) in [
             (&mut self.obs_normalizer, &mut self.obs),
             (&mut self.critic_normalizer, &mut self.critic_obs),
@@ -249,13 +242,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                     success.0 += f64::from(*v);
                     success.1 += 1;
                 }
+                check_finite("reward", step.rewards, 1)?;
                 for e in 0..n {
-                    if !step.rewards[e].is_finite() {
-                        return Err(RlError::NonFinite(format!(
-                            "env {e}'s reward ({})",
-                            step.rewards[e]
-                        )));
-                    }
                     self.current_return[e] += step.rewards[e];
                     self.current_length[e] += 1;
                     if step.dones[e] {
@@ -383,6 +371,24 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         self.wall_time = state.wall_time;
         Ok(())
     }
+}
+
+/// An error naming the env (and, for rows wider than 1, the entry) of the first non-finite
+/// value in `values` (`[num_envs × dim]`).
+fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
+    let Some(i) = values.iter().position(|v| !v.is_finite()) else {
+        return Ok(());
+    };
+    let entry = if dim > 1 {
+        format!(" {}", i % dim)
+    } else {
+        String::new()
+    };
+    Err(RlError::NonFinite(format!(
+        "env {}'s {what}{entry} ({})",
+        i / dim,
+        values[i]
+    )))
 }
 
 /// Reads a checkpoint's `model_<it>.json`.
