@@ -42,6 +42,23 @@ impl ZeroPaddedRbf {
         } else {
             (0..n).map(|j| j as f64 / (n - 1) as f64).collect()
         };
+        Ok(Self::with_centres(
+            centres,
+            zero_start,
+            learned,
+            bandwidth_factor,
+        ))
+    }
+
+    /// A basis with the given centres (phase values; ProDMP maps times evenly spaced over
+    /// τ through its exponential phase), the first `zero_start` of them unweighted.
+    pub(crate) fn with_centres(
+        centres: Vec<f64>,
+        zero_start: usize,
+        learned: usize,
+        bandwidth_factor: f64,
+    ) -> Self {
+        let n = centres.len();
         let widths = (0..n)
             .map(|j| {
                 let spacing = if n == 1 {
@@ -54,12 +71,12 @@ impl ZeroPaddedRbf {
                 bandwidth_factor / (spacing * spacing)
             })
             .collect();
-        Ok(Self {
+        Self {
             zero_start,
             learned,
             centres,
             widths,
-        })
+        }
     }
 
     /// All functions, padded ones included.

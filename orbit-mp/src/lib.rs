@@ -1,13 +1,48 @@
 //! Movement primitives for episodic (black-box) RL, following MP_PyTorch 0.1.3 as Fancy Gym's
 //! box pushing uses it (`shared/spec/box_pushing.md` §7.2): a linear phase, a zero-padded
-//! normalised RBF basis and ProMP trajectories, generated for all envs at once.
+//! normalised RBF basis and ProMP trajectories, and ProDMP (§7.4) with its exponential phase,
+//! generated for all envs at once.
 
 mod basis;
 mod error;
 mod phase;
+mod prodmp;
 mod promp;
 
 pub use basis::ZeroPaddedRbf;
 pub use error::MpError;
-pub use phase::LinearPhase;
+pub use phase::{ExpDecayPhase, LinearPhase};
+pub use prodmp::{ProDmp, ProDmpCfg};
 pub use promp::{ProMp, ProMpCfg};
+
+/// Checks the inputs of a batched trajectory call for `n` envs: each input `(name, values,
+/// width)` must hold `n × width` finite values, each output `(name, len, width)` `n × width`.
+pub(crate) fn check_inputs(
+    n: usize,
+    inputs: &[(&'static str, &[f32], usize)],
+    outputs: &[(&'static str, usize, usize)],
+) -> Result<(), MpError> {
+    let lengths = inputs
+        .iter()
+        .map(|&(name, v, w)| (name, v.len(), w))
+        .chain(outputs.iter().copied());
+    for (name, got, width) in lengths {
+        if got != n * width {
+            return Err(MpError::Length {
+                name,
+                expected: n * width,
+                got,
+            });
+        }
+    }
+    for &(name, values, width) in inputs {
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(MpError::NonFinite {
+                name,
+                env: i / width,
+                value: values[i],
+            });
+        }
+    }
+    Ok(())
+}

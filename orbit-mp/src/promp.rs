@@ -166,33 +166,17 @@ impl ProMp {
     ) -> Result<(), MpError> {
         let (dof, nb, steps) = (self.cfg.num_dof, self.cfg.num_basis, self.cfg.num_steps);
         let n = q_start.len() / dof;
-        let expect = |name, expected: usize, got: usize| {
-            if expected == got {
-                Ok(())
-            } else {
-                Err(MpError::Length {
-                    name,
-                    expected,
-                    got,
-                })
-            }
-        };
-        expect("q_start", n * dof, q_start.len())?;
-        expect("params", n * self.num_params(), params.len())?;
-        expect("pos", n * steps * dof, pos.len())?;
-        expect("vel", n * steps * dof, vel.len())?;
-        for (name, values, width) in [
-            ("params", params, self.num_params()),
-            ("q_start", q_start, dof),
-        ] {
-            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-                return Err(MpError::NonFinite {
-                    name,
-                    env: i / width,
-                    value: values[i],
-                });
-            }
-        }
+        crate::check_inputs(
+            n,
+            &[
+                ("params", params, self.num_params()),
+                ("q_start", q_start, dof),
+            ],
+            &[
+                ("pos", pos.len(), steps * dof),
+                ("vel", vel.len(), steps * dof),
+            ],
+        )?;
         let per_env = steps * dof;
         pos.par_chunks_mut(per_env)
             .zip(vel.par_chunks_mut(per_env))
