@@ -8,6 +8,13 @@ fn main() {
         println!("{:<52} {}", task.id, task.description);
     }
     println!(
+        "\n{:<52} description (black-box: one movement primitive per episode)",
+        "task id"
+    );
+    for task in orbit::managers::black_box_tasks() {
+        println!("{:<52} {}", task.id, task.description);
+    }
+    println!(
         "\nphysics backends: {:?}",
         orbit::core::physics::backend_names()
     );

@@ -23,6 +23,26 @@ pub fn make(
     managers::make(task, overrides)
 }
 
+/// Builds a registered task as the learner sees it: a step-based task as an
+/// [`RlVecEnv`](rl::RlVecEnv), a black-box task as a [`BlackBoxEnv`](rl::BlackBoxEnv) (its
+/// registered config with `black_box_overrides`). `env_overrides` apply to the step-based env.
+pub fn make_vec_env(
+    task: &str,
+    env_overrides: &[String],
+    black_box_overrides: &[String],
+) -> Result<Box<dyn rl::VecEnv>, rl::RlError> {
+    let env = make(task, env_overrides)?;
+    Ok(match managers::black_box_task(task) {
+        Some(bb) => Box::new(rl::BlackBoxEnv::from_ron(
+            env,
+            bb.config,
+            bb.file_name,
+            &bb.overrides_with(black_box_overrides),
+        )?),
+        None => Box::new(rl::RlVecEnv::new(env)?),
+    })
+}
+
 /// References the backend and task crates so their `inventory` registrations are linked in.
 pub fn link_registrations() {
     let _ = (

@@ -7,7 +7,7 @@ use clap::Parser;
 use orbit_core::config::Node;
 use orbit_rl::burn::tensor::Device;
 use orbit_rl::run_dir::{new_run_dir, resolve_checkpoint};
-use orbit_rl::{OnPolicyRunner, Policy, RlError, RlVecEnv, RunnerCfg, VecEnv};
+use orbit_rl::{OnPolicyRunner, Policy, RlError, RunnerCfg, VecEnv};
 
 /// The learning library whose configs `train` reads (`AgentCfgDef::library`).
 const LIBRARY: &str = "rsl_rl";
@@ -47,8 +47,9 @@ pub struct TrainArgs {
     /// Root of the run directories.
     #[arg(long, default_value = "logs")]
     pub log_root: PathBuf,
-    /// Config overrides: `env.<path>=<value>` for the env, `agent.<path>=<value>` for the runner
-    /// (e.g. `env.episode_length_s=4.0 agent.algorithm.learning_rate=3e-4`).
+    /// Config overrides: `env.<path>=<value>` for the env, `agent.<path>=<value>` for the runner,
+    /// `bb.<path>=<value>` for a black-box task's wrapper (e.g. `env.episode_length_s=4.0
+    /// agent.algorithm.learning_rate=3e-4 bb.trajectory[0].weights_scale=0.5`).
     pub overrides: Vec<String>,
 }
 
@@ -74,7 +75,7 @@ pub struct PlayArgs {
     /// Episodes to play per env.
     #[arg(long, default_value_t = 1)]
     pub episodes: usize,
-    /// Env overrides `env.<path>=<value>`.
+    /// Env overrides `env.<path>=<value>` and black-box overrides `bb.<path>=<value>`.
     pub overrides: Vec<String>,
 }
 
@@ -86,19 +87,31 @@ pub struct ResolvedRun {
     pub agent_doc: Node,
     /// Overrides that turn the task's env config into this run's.
     pub env_overrides: Vec<String>,
+    /// Overrides of a black-box task's wrapper config.
+    pub black_box_overrides: Vec<String>,
 }
 
-/// Splits `env.`/`agent.` overrides (a token without prefix is an env override).
-fn split_overrides(tokens: &[String]) -> (Vec<String>, Vec<String>) {
-    let (mut env, mut agent) = (Vec::new(), Vec::new());
+/// Config overrides sorted by target.
+#[derive(Default)]
+struct Overrides {
+    env: Vec<String>,
+    agent: Vec<String>,
+    black_box: Vec<String>,
+}
+
+/// Splits `env.`/`agent.`/`bb.` overrides (a token without prefix is an env override).
+fn split_overrides(tokens: &[String]) -> Overrides {
+    let mut o = Overrides::default();
     for t in tokens {
         if let Some(rest) = t.strip_prefix("agent.") {
-            agent.push(rest.to_string());
+            o.agent.push(rest.to_string());
+        } else if let Some(rest) = t.strip_prefix("bb.") {
+            o.black_box.push(rest.to_string());
         } else {
-            env.push(t.strip_prefix("env.").unwrap_or(t).to_string());
+            o.env.push(t.strip_prefix("env.").unwrap_or(t).to_string());
         }
     }
-    (env, agent)
+    o
 }
 
 /// Resolves the agent config of `args.task` with overrides and the CLI flags (which win over
@@ -118,7 +131,11 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
                 .collect::<Vec<_>>()
         ))
     })?;
-    let (user_env, mut agent_overrides) = split_overrides(&args.overrides);
+    let Overrides {
+        env: user_env,
+        agent: mut agent_overrides,
+        black_box: black_box_overrides,
+    } = split_overrides(&args.overrides);
     if let Some(s) = args.env.seed {
         agent_overrides.push(format!("seed={s}"));
     }
@@ -151,10 +168,12 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         agent,
         agent_doc,
         env_overrides,
+        black_box_overrides,
     })
 }
 
-/// Writes `params/env.ron` and `params/agent.ron` into the run directory.
+/// Writes `params/env.ron`, `params/agent.ron` and, for a black-box task,
+/// `params/black_box.ron` into the run directory.
 fn write_params(
     dir: &Path,
     task: &str,
@@ -162,21 +181,18 @@ fn write_params(
 ) -> Result<(), Box<dyn std::error::Error>> {
     let params = dir.join("params");
     std::fs::create_dir_all(&params).map_err(RlError::io(&params))?;
-    let t = orbit_managers::tasks()
-        .into_iter()
-        .find(|t| t.id == task)
-        .expect("the env was built from this task");
-    let all: Vec<String> = t
-        .overrides
-        .iter()
-        .map(|s| s.to_string())
-        .chain(run.env_overrides.iter().cloned())
-        .collect();
+    let (t, all) = orbit_managers::resolve_task(task, &run.env_overrides)?;
     let env_doc = orbit_core::config::parse_document(t.config, t.file_name, &all)?;
-    for (name, text) in [
+    let mut files = vec![
         ("env.ron", env_doc.to_ron()),
         ("agent.ron", run.agent_doc.to_ron()),
-    ] {
+    ];
+    if let Some(bb) = orbit_managers::black_box_task(task) {
+        let overrides = bb.overrides_with(&run.black_box_overrides);
+        let doc = orbit_core::config::parse_document(bb.config, bb.file_name, &overrides)?;
+        files.push(("black_box.ron", doc.to_ron()));
+    }
+    for (name, text) in files {
         let path = params.join(name);
         std::fs::write(&path, text).map_err(RlError::io(path))?;
     }
@@ -187,9 +203,8 @@ fn write_params(
 pub fn train(
     args: &TrainArgs,
     show_progress: bool,
-) -> Result<OnPolicyRunner<RlVecEnv>, Box<dyn std::error::Error>> {
+) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
     let run = resolve(args)?;
-    let env = crate::make(&args.task, &run.env_overrides)?;
     let cfg = run.agent.clone();
     let dir = new_run_dir(&args.log_root, &cfg.experiment_name, &cfg.run_name);
     let resume_from = if args.resume {
@@ -203,7 +218,7 @@ pub fn train(
     };
     std::fs::create_dir_all(&dir).map_err(RlError::io(&dir))?;
     write_params(&dir, &args.task, &run)?;
-    let vec_env = RlVecEnv::new(env)?;
+    let vec_env = crate::make_vec_env(&args.task, &run.env_overrides, &run.black_box_overrides)?;
     println!(
         "{}: {} envs × {} steps per iteration, {} iterations; run directory {}",
         args.task,
@@ -235,7 +250,7 @@ pub fn train(
 /// success metric.
 pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     crate::link_registrations();
-    let (env_overrides, _) = split_overrides(&args.overrides);
+    let overrides = split_overrides(&args.overrides);
     let base = match &args.checkpoint {
         Some(p) => p.with_extension(""),
         None => {
@@ -255,8 +270,9 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     };
     let policy = Policy::load(&base, Device::flex())?;
     let e = &args.env;
-    let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &env_overrides);
-    let mut env = RlVecEnv::new(crate::make(&args.task, &overrides)?)?;
+    let env_overrides =
+        crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &overrides.env);
+    let mut env = crate::make_vec_env(&args.task, &env_overrides, &overrides.black_box)?;
     if env.num_obs() != policy.num_obs() {
         return Err(RlError::EnvMismatch(format!(
             "the policy expects {} observations, the env gives {}",

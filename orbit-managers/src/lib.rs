@@ -23,4 +23,7 @@ pub use base_env::{EnvRngs, EnvView, ManagerBasedEnv, StepTimings};
 pub use error::EnvError;
 pub use rl_env::{Extras, ManagerBasedRlEnv, StepResult};
 pub use scene::Scene;
-pub use task::{AgentCfgDef, TaskDef, agent_cfg, make, tasks};
+pub use task::{
+    AgentCfgDef, BlackBoxTaskDef, TaskDef, agent_cfg, black_box_task, black_box_tasks, make,
+    resolve_task, tasks,
+};

@@ -145,6 +145,12 @@ impl ActionManager {
         }
     }
 
+    /// Every term's name and, for joint terms, how it maps raw actions onto joints (in action
+    /// order: a term's values follow the previous term's).
+    pub fn joint_maps(&self) -> impl Iterator<Item = (&str, Option<JointActionMap<'_>>)> {
+        self.terms.iter().map(|(n, t)| (n.as_str(), t.joint_map()))
+    }
+
     /// The processed actions of a term by name.
     pub fn processed(&self, name: &str) -> Option<&[f32]> {
         self.terms

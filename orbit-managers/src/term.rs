@@ -89,6 +89,39 @@ pub trait ActionTerm: Send + Sync {
     fn reset(&mut self, _env_ids: &[usize]) {}
     /// Processed actions, `num_envs × dim` (e.g. the commanded torques).
     fn processed(&self) -> &[f32];
+    /// For a term that drives joints directly, how its raw actions map onto them (lets a
+    /// tracking controller, such as the black-box wrapper's, turn desired joint values into
+    /// actions); `None` for other terms.
+    fn joint_map(&self) -> Option<JointActionMap<'_>> {
+        None
+    }
+}
+
+/// What a joint action term drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointActionKind {
+    /// Joint position targets of the implicit PD drives.
+    Position,
+    /// Joint efforts (torques).
+    Effort,
+}
+
+/// How a joint action term maps raw actions onto joints: for action `k`,
+/// `processed = clip(raw) · scale + offsets[k]` drives dof `dofs[k]` of `articulation`.
+#[derive(Clone, Copy, Debug)]
+pub struct JointActionMap<'a> {
+    /// Position targets or efforts.
+    pub kind: JointActionKind,
+    /// Articulation index in the scene.
+    pub articulation: usize,
+    /// Dofs of the articulation, one per action value.
+    pub dofs: &'a [usize],
+    /// Scale of the raw action.
+    pub scale: f32,
+    /// Offset per action value.
+    pub offsets: &'a [f32],
+    /// Range the raw action is clipped to first, if any.
+    pub clip: Option<(f32, f32)>,
 }
 
 /// An event term, applied to a set of envs.

@@ -18,7 +18,9 @@ use crate::{ExpDecayPhase, MpError, ZeroPaddedRbf};
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ProDmpCfg {
-    /// Degrees of freedom (joints) of a trajectory.
+    /// Degrees of freedom (joints) of a trajectory. In a black-box config, 0 (the default)
+    /// means the env's action dimension.
+    #[serde(default)]
     pub num_dof: usize,
     /// Weighted basis functions per dof.
     pub num_basis: usize,
@@ -52,9 +54,12 @@ pub struct ProDmpCfg {
     /// The goal (parameter, or 0 with `disable_goal`) is added to the start position.
     #[serde(default)]
     pub relative_goal: bool,
-    /// Time between samples (s): the env's step.
+    /// Time between samples (s). In a black-box config, 0 (the default) means the env's step.
+    #[serde(default)]
     pub dt: f64,
-    /// Samples per trajectory.
+    /// Samples per trajectory. In a black-box config, 0 (the default) means the env's episode
+    /// length in steps.
+    #[serde(default)]
     pub num_steps: usize,
     /// Spacing (s) of the grid the basis is tabulated on.
     #[serde(default = "pre_compute_dt")]

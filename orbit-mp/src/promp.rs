@@ -12,7 +12,9 @@ use crate::{LinearPhase, MpError, ZeroPaddedRbf};
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ProMpCfg {
-    /// Degrees of freedom (joints) of a trajectory.
+    /// Degrees of freedom (joints) of a trajectory. In a black-box config, 0 (the default)
+    /// means the env's action dimension.
+    #[serde(default)]
     pub num_dof: usize,
     /// Weighted basis functions per dof.
     pub num_basis: usize,
@@ -32,9 +34,12 @@ pub struct ProMpCfg {
     /// Scale of every weight.
     #[serde(default = "unit")]
     pub weights_scale: f64,
-    /// Time between samples (s): the env's step.
+    /// Time between samples (s). In a black-box config, 0 (the default) means the env's step.
+    #[serde(default)]
     pub dt: f64,
-    /// Samples per trajectory.
+    /// Samples per trajectory. In a black-box config, 0 (the default) means the env's episode
+    /// length in steps.
+    #[serde(default)]
     pub num_steps: usize,
 }
 

@@ -48,6 +48,9 @@ pub enum RlError {
         /// What went wrong.
         message: String,
     },
+    /// A movement primitive's config or input is unusable (black-box envs).
+    #[error(transparent)]
+    Mp(#[from] orbit_mp::MpError),
     /// The learner's device could not be opened.
     #[error("learner device: {0}")]
     Device(String),

@@ -3,13 +3,14 @@
 //! inference [`Policy`].
 //!
 //! ```text
-//! VecEnv (RlVecEnv over a ManagerBasedRlEnv)
+//! VecEnv (RlVecEnv over a ManagerBasedRlEnv, or BlackBoxEnv: one movement primitive per episode)
 //!   └─ OnPolicyRunner::learn: act → env.step → process_env_step (× num_steps_per_env)
 //!                             → compute_returns (GAE) → update (PPO epochs × minibatches)
 //! ```
 
 #![warn(missing_docs)]
 
+pub mod black_box;
 pub mod cfg;
 mod error;
 pub mod logger;
@@ -24,6 +25,7 @@ pub mod storage;
 pub mod tensorboard;
 pub mod vec_env;
 
+pub use black_box::{BlackBoxCfg, BlackBoxEnv};
 pub use burn;
 pub use cfg::{LearnerDevice, RunnerCfg};
 pub use error::RlError;

@@ -45,6 +45,45 @@ pub trait VecEnv {
     fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError>;
 }
 
+/// A boxed env is an env: lets one runner type train step-based and black-box envs.
+impl<E: VecEnv + ?Sized> VecEnv for Box<E> {
+    fn num_envs(&self) -> usize {
+        (**self).num_envs()
+    }
+
+    fn num_actions(&self) -> usize {
+        (**self).num_actions()
+    }
+
+    fn num_obs(&self) -> usize {
+        (**self).num_obs()
+    }
+
+    fn num_critic_obs(&self) -> usize {
+        (**self).num_critic_obs()
+    }
+
+    fn max_episode_length(&self) -> u32 {
+        (**self).max_episode_length()
+    }
+
+    fn observations(&self) -> &[f32] {
+        (**self).observations()
+    }
+
+    fn critic_observations(&self) -> &[f32] {
+        (**self).critic_observations()
+    }
+
+    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
+        (**self).step(actions)
+    }
+
+    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError> {
+        (**self).randomize_episode_lengths(seed)
+    }
+}
+
 /// A [`ManagerBasedRlEnv`] as a [`VecEnv`]: observation group `policy` for the actor, `critic`
 /// (if present) for the critic. Resets the env once on construction.
 pub struct RlVecEnv {

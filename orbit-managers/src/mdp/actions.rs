@@ -52,12 +52,6 @@ impl Default for JointActionParams {
     }
 }
 
-#[derive(Clone, Copy, PartialEq)]
-enum JointActionKind {
-    Position,
-    Effort,
-}
-
 /// `joint_position` and `joint_effort` actions.
 struct JointAction {
     kind: JointActionKind,
@@ -126,6 +120,17 @@ impl ActionTerm for JointAction {
 
     fn processed(&self) -> &[f32] {
         &self.processed
+    }
+
+    fn joint_map(&self) -> Option<JointActionMap<'_>> {
+        Some(JointActionMap {
+            kind: self.kind,
+            articulation: self.sel.articulation,
+            dofs: &self.sel.dofs,
+            scale: self.p.scale,
+            offsets: &self.offsets,
+            clip: self.p.clip,
+        })
     }
 }
 

@@ -149,3 +149,109 @@ inventory::submit! {
         config: PPO,
     }
 }
+
+/// Black-box configs (`config/black_box_*.ron`): one movement primitive per episode.
+const BB_PROMP: &str = include_str!("../config/black_box_promp.ron");
+const BB_PRODMP: &str = include_str!("../config/black_box_prodmp.ron");
+const BB_PRODMP_REPLAN: &str = include_str!("../config/black_box_prodmp_replan.ron");
+
+/// Fancy Gym's random-init context: joint positions, box pose and target (21 values).
+const RANDOM_INIT_CONTEXT: &[&str] = &["context=Some([(0, 7), (14, 28)])"];
+
+inventory::submit! {
+    orbit_managers::BlackBoxTaskDef {
+        id: "BoxPushing-ProMP-Franka-v0",
+        description: "black-box box pushing: a ProMP per episode from the target pose, Fancy Gym's PD on the torque env, Dense reward",
+        env_task: "BoxPushing-Torque-Franka-v0",
+        env_overrides: &[],
+        file_name: "black_box_promp.ron (bundled)",
+        config: BB_PROMP,
+        overrides: &[],
+    }
+}
+
+inventory::submit! {
+    orbit_managers::BlackBoxTaskDef {
+        id: "BoxPushing-ProMP-JointPos-Franka-v0",
+        description: "black-box box pushing: a ProMP per episode as joint position targets of the implicit PD drives (Orbit's way), Dense reward",
+        env_task: "BoxPushing-JointPos-Franka-v0",
+        env_overrides: &[],
+        file_name: "black_box_promp.ron (bundled)",
+        config: BB_PROMP,
+        overrides: &["controller=JointPosition"],
+    }
+}
+
+inventory::submit! {
+    orbit_managers::BlackBoxTaskDef {
+        id: "BoxPushing-ProMP-TemporalSparse-Franka-v0",
+        description: "black-box box pushing: a ProMP per episode, Fancy Gym's PD, TemporalSparse reward",
+        env_task: "BoxPushing-Torque-TemporalSparse-Franka-v0",
+        env_overrides: &[],
+        file_name: "black_box_promp.ron (bundled)",
+        config: BB_PROMP,
+        overrides: &[],
+    }
+}
+
+inventory::submit! {
+    orbit_managers::BlackBoxTaskDef {
+        id: "BoxPushing-ProMP-RandomInit-Franka-v0",
+        description: "black-box box pushing from a random box pose: a ProMP per episode from joints, box and target, Fancy Gym's PD, Dense reward",
+        env_task: "BoxPushing-Torque-RandomInit-Franka-v0",
+        env_overrides: &[],
+        file_name: "black_box_promp.ron (bundled)",
+        config: BB_PROMP,
+        overrides: RANDOM_INIT_CONTEXT,
+    }
+}
+
+inventory::submit! {
+    orbit_managers::BlackBoxTaskDef {
+        id: "BoxPushing-ProDMP-Franka-v0",
+        description: "black-box box pushing: a ProDMP (weights and goal) per episode, Fancy Gym's PD on the torque env, Dense reward",
+        env_task: "BoxPushing-Torque-Franka-v0",
+        env_overrides: &[],
+        file_name: "black_box_prodmp.ron (bundled)",
+        config: BB_PRODMP,
+        overrides: &[],
+    }
+}
+
+inventory::submit! {
+    orbit_managers::BlackBoxTaskDef {
+        id: "BoxPushing-ProDMP-Replan-Franka-v0",
+        description: "black-box box pushing with replanning: a ProDMP every 25 steps from the previous plan's desired state, Fancy Gym's PD, Dense reward",
+        env_task: "BoxPushing-Torque-Franka-v0",
+        env_overrides: &[],
+        file_name: "black_box_prodmp_replan.ron (bundled)",
+        config: BB_PRODMP_REPLAN,
+        overrides: &[],
+    }
+}
+
+/// BBRL-PPO (`config/box_pushing_bbrl_ppo.ron`): the Orbit port's black-box settings.
+const BBRL_PPO: &str = include_str!("../config/box_pushing_bbrl_ppo.ron");
+
+/// Registers BBRL-PPO as the `rsl_rl` training config of black-box tasks.
+macro_rules! bbrl_ppo {
+    ($($task:literal),* $(,)?) => {
+        $(inventory::submit! {
+            orbit_managers::AgentCfgDef {
+                task: $task,
+                library: "rsl_rl",
+                file_name: "box_pushing_bbrl_ppo.ron (bundled)",
+                config: BBRL_PPO,
+            }
+        })*
+    };
+}
+
+bbrl_ppo!(
+    "BoxPushing-ProMP-Franka-v0",
+    "BoxPushing-ProMP-JointPos-Franka-v0",
+    "BoxPushing-ProMP-TemporalSparse-Franka-v0",
+    "BoxPushing-ProMP-RandomInit-Franka-v0",
+    "BoxPushing-ProDMP-Franka-v0",
+    "BoxPushing-ProDMP-Replan-Franka-v0",
+);
