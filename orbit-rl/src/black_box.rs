@@ -258,11 +258,11 @@ impl BlackBoxEnv {
                         ));
                     }
                 }
-                if !(clip.0 < clip.1) {
+                if !(clip.0.is_finite() && clip.1.is_finite()) || clip.0 >= clip.1 {
                     return Err(invalid(
                         file,
                         "controller.clip",
-                        "expected a range (low, high) with low < high",
+                        "expected a finite range (low, high) with low < high",
                     ));
                 }
                 Controller::Pd {
@@ -577,6 +577,7 @@ impl VecEnv for BlackBoxEnv {
             } else {
                 &self.empty_log
             },
+            interactions: length as u32,
         })
     }
 

@@ -51,6 +51,71 @@ impl ScalarLog {
     }
 }
 
+/// Reads a `scalars.csv` back into one [`IterationLog`] per iteration (for re-plotting a run
+/// that was stopped before it drew its curves). Tags it does not know go to `episode`.
+pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
+    let text = std::fs::read_to_string(path).map_err(RlError::io(path))?;
+    let bad = |line: usize, what: &str| RlError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("line {line}: {what}; expected `iteration,env_steps,wall_time,tag,value`"),
+        ),
+    };
+    let mut logs: Vec<IterationLog> = Vec::new();
+    for (i, row) in text.lines().enumerate().skip(1) {
+        let f: Vec<&str> = row.splitn(5, ',').collect();
+        let [it, steps, t, tag, value] = f[..] else {
+            return Err(bad(i + 1, "not five fields"));
+        };
+        let (Ok(it), Ok(steps), Ok(t), Ok(value)) = (
+            it.parse::<usize>(),
+            steps.parse::<u64>(),
+            t.parse::<f64>(),
+            value.parse::<f64>(),
+        ) else {
+            return Err(bad(i + 1, "a field is not a number"));
+        };
+        if logs.last().is_none_or(|l| l.iteration != it) {
+            logs.push(IterationLog {
+                iteration: it,
+                env_steps: steps,
+                wall_time: t,
+                mean_return: None,
+                mean_episode_length: None,
+                success_rate: None,
+                losses: Default::default(),
+                learning_rate: 0.0,
+                mean_noise_std: 0.0,
+                fps: 0.0,
+                collection_time: 0.0,
+                learning_time: 0.0,
+                episode: Default::default(),
+            });
+        }
+        let log = logs.last_mut().expect("pushed above");
+        let v32 = value as f32;
+        match tag {
+            "Loss/value_function" => log.losses.value = v32,
+            "Loss/surrogate" => log.losses.surrogate = v32,
+            "Loss/entropy" => log.losses.entropy = v32,
+            "Loss/learning_rate" => log.learning_rate = value,
+            "Policy/mean_noise_std" => log.mean_noise_std = v32,
+            "Perf/total_fps" => log.fps = value,
+            "Perf/collection_time" => log.collection_time = value,
+            "Perf/learning_time" => log.learning_time = value,
+            "Train/mean_reward" => log.mean_return = Some(v32),
+            "Train/mean_episode_length" => log.mean_episode_length = Some(v32),
+            "Train/success_rate" => log.success_rate = Some(v32),
+            other => {
+                let key = other.strip_prefix("Episode/").unwrap_or(other);
+                log.episode.insert(key.to_string(), v32);
+            }
+        }
+    }
+    Ok(logs)
+}
+
 /// An iteration's scalars under RSL-RL's TensorBoard tags. Episode-log keys containing `/`
 /// keep their name, others become `Episode/<key>`.
 pub fn scalars(log: &IterationLog) -> Vec<(String, f64)> {

@@ -28,7 +28,8 @@ const EPISODE_WINDOW: usize = 100;
 pub struct IterationLog {
     /// 0-based iteration.
     pub iteration: usize,
-    /// Env transitions collected so far (all envs, all iterations, this one included).
+    /// Env interactions (simulated env steps) so far, all envs, all iterations, this one
+    /// included; a black-box step counts the env steps of its trajectory.
     pub env_steps: u64,
     /// Wall-clock seconds since training started (collection + learning, summed over
     /// iterations of this and resumed runs).
@@ -45,7 +46,7 @@ pub struct IterationLog {
     pub learning_rate: f64,
     /// Mean action-noise standard deviation.
     pub mean_noise_std: f32,
-    /// Transitions per second of this iteration (collection and learning).
+    /// Env interactions per second of this iteration (collection and learning).
     pub fps: f64,
     /// Seconds spent collecting.
     pub collection_time: f64,
@@ -223,9 +224,11 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let start = Instant::now();
             let mut success = (0.0f64, 0usize);
             let mut episode: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+            let mut interactions = 0u64;
             for _ in 0..t_steps {
                 self.alg.act(&self.obs, &self.critic_obs, &mut actions)?;
                 let step = self.env.step(&actions)?;
+                interactions += n as u64 * u64::from(step.interactions);
                 self.alg
                     .process_env_step(step.rewards, step.dones, step.time_outs);
                 for (key, &v) in step.log {
@@ -264,7 +267,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let learn_start = Instant::now();
             let losses = self.alg.update()?;
             let learning_time = learn_start.elapsed().as_secs_f64();
-            self.env_steps += (n * t_steps) as u64;
+            self.env_steps += interactions;
             self.wall_time += collection_time + learning_time;
             let mean =
                 |q: &VecDeque<f32>| (!q.is_empty()).then(|| q.iter().sum::<f32>() / q.len() as f32);
@@ -279,7 +282,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 losses,
                 learning_rate: self.alg.learning_rate,
                 mean_noise_std: noise.iter().sum::<f32>() / noise.len() as f32,
-                fps: (n * t_steps) as f64 / (collection_time + learning_time),
+                fps: interactions as f64 / (collection_time + learning_time),
                 collection_time,
                 learning_time,
                 episode: episode

@@ -18,6 +18,9 @@ pub struct VecEnvStep<'a> {
     pub time_outs: &'a [bool],
     /// Episode statistics of the envs that finished in this step (empty if none did).
     pub log: &'a BTreeMap<String, f32>,
+    /// Simulated env steps each env took for this step: 1 for a step-based env, the segment's
+    /// length for a black-box env. Env interactions are counted in these.
+    pub interactions: u32,
 }
 
 /// A batch of environments as the learner sees it. The env resets itself: finished envs come
@@ -171,6 +174,7 @@ impl VecEnv for RlVecEnv {
             } else {
                 &self.empty_log
             },
+            interactions: 1,
         })
     }
 

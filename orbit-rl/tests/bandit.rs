@@ -72,6 +72,7 @@ impl VecEnv for Bandit {
             dones: &self.dones,
             time_outs: &self.time_outs,
             log: &self.log,
+            interactions: 1,
         })
     }
     fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), RlError> {

@@ -1,0 +1,62 @@
+//! `scalars.csv` round trip: what the runner writes, `read_scalars` reads back unchanged (the
+//! wall time is written to the millisecond, so the test uses whole milliseconds).
+
+use std::collections::BTreeMap;
+
+use orbit_rl::IterationLog;
+use orbit_rl::logger::{ScalarLog, read_scalars};
+use orbit_rl::ppo::LossStats;
+
+fn log(iteration: usize, success: Option<f32>) -> IterationLog {
+    IterationLog {
+        iteration,
+        env_steps: 409_600 * (iteration as u64 + 1),
+        wall_time: 2.125 * (iteration as f64 + 1.0),
+        mean_return: Some(-251.37 + iteration as f32),
+        mean_episode_length: Some(1.0),
+        success_rate: success,
+        losses: LossStats {
+            value: 7.5e4,
+            surrogate: -0.143,
+            entropy: 49.646,
+        },
+        learning_rate: 1e-4,
+        mean_noise_std: 0.99946,
+        fps: 192_753.123_456,
+        collection_time: 1.712_345,
+        learning_time: 0.412_5,
+        episode: BTreeMap::from([
+            ("Metrics/target/success".to_string(), 0.25),
+            ("reward_sum".to_string(), -3.5),
+        ]),
+    }
+}
+
+#[test]
+fn scalars_read_back_as_written() {
+    let dir = std::env::temp_dir().join(format!("orbit-scalars-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let written = vec![log(0, None), log(1, Some(0.5))];
+    {
+        let mut out = ScalarLog::create(&dir).unwrap();
+        for l in &written {
+            out.write(l).unwrap();
+        }
+    }
+    let read = read_scalars(&dir.join("scalars.csv")).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(read, written);
+}
+
+#[test]
+fn a_malformed_row_names_its_line() {
+    let path = std::env::temp_dir().join(format!("orbit-bad-scalars-{}.csv", std::process::id()));
+    std::fs::write(
+        &path,
+        "iteration,env_steps,wall_time,tag,value\n0,1,0.5,Loss/x\n",
+    )
+    .unwrap();
+    let e = read_scalars(&path).unwrap_err().to_string();
+    std::fs::remove_file(&path).unwrap();
+    assert!(e.contains("line 2") && e.contains("five fields"), "{e}");
+}
