@@ -30,12 +30,7 @@ impl ZeroPaddedRbf {
                 message: "at least one basis function is needed".into(),
             });
         }
-        if !(bandwidth_factor.is_finite() && bandwidth_factor > 0.0) {
-            return Err(MpError::InvalidConfig {
-                field: "basis_bandwidth_factor",
-                message: format!("expected a positive number, got {bandwidth_factor}"),
-            });
-        }
+        crate::check_number("basis_bandwidth_factor", bandwidth_factor, true)?;
         let n = zero_start + learned + zero_goal;
         let centres: Vec<f64> = if n == 1 {
             vec![0.0]

@@ -15,6 +15,19 @@ pub use phase::{ExpDecayPhase, LinearPhase};
 pub use prodmp::{ProDmp, ProDmpCfg};
 pub use promp::{ProMp, ProMpCfg};
 
+/// Checks a config number: finite, and above zero if `positive`.
+pub(crate) fn check_number(field: &'static str, v: f64, positive: bool) -> Result<(), MpError> {
+    if v.is_finite() && (!positive || v > 0.0) {
+        Ok(())
+    } else {
+        let what = if positive { "positive" } else { "finite" };
+        Err(MpError::InvalidConfig {
+            field,
+            message: format!("expected a {what} number, got {v}"),
+        })
+    }
+}
+
 /// Checks the inputs of a batched trajectory call for `n` envs: each input `(name, values,
 /// width)` must hold `n × width` finite values, each output `(name, len, width)` `n × width`.
 pub(crate) fn check_inputs(

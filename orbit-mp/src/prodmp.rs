@@ -10,7 +10,7 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::{ExpDecayPhase, MpError, ZeroPaddedRbf};
+use crate::{ExpDecayPhase, MpError, ZeroPaddedRbf, check_number};
 
 /// A ProDMP's settings (Fancy Gym's box pushing: α 10, α_x 3, τ 1.5 s, 5 basis, bandwidth
 /// factor 2; the replanning variant factor 3, auto-scaled basis, weight and goal scale 0.3,
@@ -116,18 +116,6 @@ pub struct ProDmp {
     scale: Vec<f64>,
 }
 
-fn check(field: &'static str, v: f64, positive: bool) -> Result<(), MpError> {
-    if v.is_finite() && (!positive || v > 0.0) {
-        Ok(())
-    } else {
-        let what = if positive { "positive" } else { "finite" };
-        Err(MpError::InvalidConfig {
-            field,
-            message: format!("expected a {what} number, got {v}"),
-        })
-    }
-}
-
 impl ProDmp {
     /// Checks `cfg` and tabulates the basis.
     pub fn new(cfg: ProDmpCfg) -> Result<Self, MpError> {
@@ -158,14 +146,14 @@ impl ProDmp {
             ("pre_compute_dt", cfg.pre_compute_dt),
             ("pre_compute_length_factor", cfg.pre_compute_length_factor),
         ] {
-            check(field, v, true)?;
+            check_number(field, v, true)?;
         }
         for (field, v) in [
             ("delay", cfg.delay),
             ("weights_scale", cfg.weights_scale),
             ("goal_scale", cfg.goal_scale),
         ] {
-            check(field, v, false)?;
+            check_number(field, v, false)?;
         }
         let phase = ExpDecayPhase {
             tau: cfg.tau,
@@ -361,7 +349,7 @@ impl ProDmp {
                 ("vel", vel.len(), steps * dof),
             ],
         )?;
-        check("t0", t0, false)?;
+        check_number("t0", t0, false)?;
         let t_end = t0 + steps as f64 * self.cfg.dt;
         if self.phase.scaled_time(t_end) > self.grid_end() + 1e-9 {
             return Err(MpError::InvalidConfig {

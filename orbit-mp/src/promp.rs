@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::{LinearPhase, MpError, ZeroPaddedRbf};
+use crate::{LinearPhase, MpError, ZeroPaddedRbf, check_number};
 
 /// A ProMP's settings (Fancy Gym's box pushing: 7 dof, 5 basis + 1 zero-start, bandwidth
 /// factor 2, τ = 2 s, dt = 0.02 s, 100 steps).
@@ -63,17 +63,6 @@ pub struct ProMp {
     weighted: Vec<f64>,
 }
 
-fn positive(field: &'static str, v: f64) -> Result<(), MpError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(MpError::InvalidConfig {
-            field,
-            message: format!("expected a positive number, got {v}"),
-        })
-    }
-}
-
 impl ProMp {
     /// Checks `cfg` and tabulates the basis at the sample times.
     pub fn new(cfg: ProMpCfg) -> Result<Self, MpError> {
@@ -89,16 +78,10 @@ impl ProMp {
                 message: format!("velocities need at least 2 samples, got {}", cfg.num_steps),
             });
         }
-        positive("tau", cfg.tau)?;
-        positive("dt", cfg.dt)?;
-        for (field, v) in [("delay", cfg.delay), ("weights_scale", cfg.weights_scale)] {
-            if !v.is_finite() {
-                return Err(MpError::InvalidConfig {
-                    field,
-                    message: format!("expected a finite number, got {v}"),
-                });
-            }
-        }
+        check_number("tau", cfg.tau, true)?;
+        check_number("dt", cfg.dt, true)?;
+        check_number("delay", cfg.delay, false)?;
+        check_number("weights_scale", cfg.weights_scale, false)?;
         let basis = ZeroPaddedRbf::new(
             cfg.num_basis,
             cfg.num_basis_zero_start,

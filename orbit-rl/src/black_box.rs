@@ -102,6 +102,14 @@ impl Generator {
         }
     }
 
+    /// Samples per plan.
+    fn num_steps(&self) -> usize {
+        match self {
+            Generator::ProMp(p) => p.cfg().num_steps,
+            Generator::ProDmp(p) => p.cfg().num_steps,
+        }
+    }
+
     /// Trajectories from `t0` (a ProMP only starts at 0; checked on construction).
     fn generate(
         &self,
@@ -294,10 +302,7 @@ impl BlackBoxEnv {
             }
         };
         let max_len = env.max_episode_length();
-        let steps = match &generator {
-            Generator::ProMp(p) => p.cfg().num_steps,
-            Generator::ProDmp(p) => p.cfg().num_steps,
-        };
+        let steps = generator.num_steps();
         let segments = match &cfg.replanning {
             None => 1,
             Some(r) => {
@@ -433,7 +438,7 @@ impl BlackBoxEnv {
     /// The actions of sample `k` of the plan from the measured state.
     fn compute_actions(&mut self, k: usize) {
         let dof = self.joints.len();
-        let samples = self.desired_pos.len() / self.q.len();
+        let samples = self.generator.num_steps();
         for e in 0..self.env.num_envs() {
             let base = (e * samples + k) * dof;
             let (qd_des, vd_des) = (
@@ -552,7 +557,7 @@ impl VecEnv for BlackBoxEnv {
             }
         }
         // The next plan starts from the last executed desired sample.
-        let samples = self.desired_pos.len() / (n * dof);
+        let samples = self.generator.num_steps();
         for e in 0..n {
             let src = (e * samples + length - 1) * dof;
             self.q_cond[e * dof..(e + 1) * dof].copy_from_slice(&self.desired_pos[src..src + dof]);
