@@ -128,11 +128,33 @@ pub struct PpoCfg {
     pub lam: f32,
     /// Target KL divergence of the adaptive schedule.
     pub desired_kl: f32,
-    /// Global gradient-norm clip.
+    /// Gradient-norm clip (see `grad_clip` for what the norm is taken over).
     pub max_grad_norm: f32,
     /// Normalise advantages per minibatch instead of over the whole rollout.
     #[serde(default)]
     pub normalize_advantage_per_mini_batch: bool,
+    /// Which gradients share one norm clip: all of them (RSL-RL 2.x, the default) or the
+    /// actor's and the critic's separately (RSL-RL 5).
+    #[serde(default)]
+    pub grad_clip: GradClip,
+    /// Train the critic on returns normalised by their running mean and standard deviation, and
+    /// denormalise its output wherever a value is used (rl_games' `normalize_value`; not in
+    /// RSL-RL). Helps when returns are far from the critic's initial output, e.g. the sums of
+    /// a whole episode's rewards in black-box RL.
+    #[serde(default)]
+    pub normalize_value: bool,
+}
+
+/// How the gradient norm is clipped.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+pub enum GradClip {
+    /// One norm over every parameter (`clip_grad_norm_(all params)`, RSL-RL 2.x): while the
+    /// value loss is large, the critic's gradient sets the factor that scales the actor's.
+    #[default]
+    Global,
+    /// The actor (with the noise parameter) and the critic each clipped to `max_grad_norm`
+    /// (RSL-RL 5).
+    PerNetwork,
 }
 
 /// Learning-rate schedule.

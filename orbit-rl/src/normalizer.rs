@@ -68,6 +68,16 @@ impl EmpiricalNormalizer {
             }
         }
     }
+
+    /// Inverts [`normalize`](Self::normalize) in place: `x·(σ + ε) + μ`.
+    pub fn denormalize(&self, x: &mut [f32]) {
+        let d = self.dim();
+        for row in x.chunks_exact_mut(d) {
+            for ((v, &m), &var) in row.iter_mut().zip(&self.mean).zip(&self.var) {
+                *v = *v * (var.sqrt() + self.eps) + m;
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -93,6 +103,8 @@ mod tests {
         n.normalize(&mut x);
         assert!((x[0] - 8f32.sqrt() / (8f32.sqrt() + 0.01)).abs() < 1e-6 && x[1].abs() < 1e-6);
         assert_eq!(n.count, 5);
+        n.denormalize(&mut x);
+        assert!((x[0] - (5.0 + 8f32.sqrt())).abs() < 1e-5 && (x[1] - m1).abs() < 1e-5);
     }
 
     /// Past `until` rows, updates leave the statistics unchanged.

@@ -1,7 +1,9 @@
 //! Proximal policy optimisation with RSL-RL's exact semantics (spec §6.3): time-out
 //! bootstrapping, GAE, whole-rollout advantage normalisation, one shuffle reused across epochs,
 //! the KL-adaptive learning rate applied per minibatch before its gradient step, clipped
-//! surrogate and value losses, an entropy bonus and a global gradient-norm clip.
+//! surrogate and value losses, an entropy bonus and a gradient-norm clip (global, or per
+//! network as in RSL-RL 5). Optionally the critic learns normalised returns (rl_games'
+//! `normalize_value`).
 
 use std::f32::consts::PI;
 use std::path::Path;
@@ -11,8 +13,9 @@ use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Tensor, TensorData};
 use orbit_core::rng::EnvRng;
 
-use crate::cfg::{PpoCfg, Schedule};
+use crate::cfg::{GradClip, PpoCfg, Schedule};
 use crate::model::ActorCritic;
+use crate::normalizer::EmpiricalNormalizer;
 use crate::storage::{self, RolloutStorage};
 use crate::{RlError, streams};
 
@@ -38,6 +41,9 @@ pub struct Ppo {
     pub learning_rate: f64,
     /// This iteration's transitions.
     pub storage: RolloutStorage,
+    /// Running statistics of the returns when `normalize_value` is set: the critic's output
+    /// is a normalised value, denormalised by these statistics.
+    pub value_normalizer: Option<EmpiricalNormalizer>,
     optimizer: ModuleOptimizer,
     device: Device,
     seed: u64,
@@ -102,6 +108,9 @@ impl Ppo {
             .collect();
         Self {
             learning_rate: cfg.learning_rate,
+            value_normalizer: cfg
+                .normalize_value
+                .then(|| EmpiricalNormalizer::new(1, u64::MAX)),
             cfg,
             model,
             storage: RolloutStorage::new(num_steps, num_envs, num_obs, num_critic_obs, num_actions),
@@ -147,7 +156,10 @@ impl Ppo {
         let device = self.device.clone();
         let model = self.rollout_model();
         let mu = values(model.action_mean(tensor2(obs.to_vec(), n, no, &device)));
-        let value = values(model.value(tensor2(critic_obs.to_vec(), n, nc, &device)));
+        let mut value = values(model.value(tensor2(critic_obs.to_vec(), n, nc, &device)));
+        if let Some(normalizer) = &self.value_normalizer {
+            normalizer.denormalize(&mut value);
+        }
         if mu.iter().chain(&value).any(|v| !v.is_finite()) {
             return Err(RlError::NonFinite("the policy's output".into()));
         }
@@ -198,14 +210,25 @@ impl Ppo {
     pub fn compute_returns(&mut self, last_critic_obs: &[f32]) {
         let (n, nc) = (self.storage.num_envs, self.storage.num_critic_obs);
         let device = self.device.clone();
-        let last =
+        let mut last =
             values(
                 self.rollout_model()
                     .value(tensor2(last_critic_obs.to_vec(), n, nc, &device)),
             );
+        if let Some(normalizer) = &self.value_normalizer {
+            normalizer.denormalize(&mut last);
+        }
         let (gamma, lam) = (self.cfg.gamma, self.cfg.lam);
         let per_mb = self.cfg.normalize_advantage_per_mini_batch;
         self.storage.compute_returns(&last, gamma, lam, per_mb);
+        // The critic trains on normalised targets: fold this rollout's returns into the
+        // statistics, then express the returns and the old values (for value clipping) in
+        // them.
+        if let Some(normalizer) = &mut self.value_normalizer {
+            normalizer.update(&self.storage.returns);
+            normalizer.normalize(&mut self.storage.returns);
+            normalizer.normalize(&mut self.storage.values);
+        }
     }
 
     /// The PPO update over the stored rollout; clears the storage.
@@ -325,19 +348,23 @@ impl Ppo {
             - l.entropy.clone().mul_scalar(cfg.entropy_coef);
         let mut grads = GradientsParams::from_grads(loss.backward(), &self.model);
         // One readback per minibatch (a GPU learner waits for each): the KL, the three
-        // losses and the squared gradient norm.
+        // losses and the squared gradient norms of the actor (with the noise parameter) and
+        // of the critic.
+        let actor_norm = grad_norm_squared(&self.model.actor, &grads)
+            + grad_norm_squared(&self.model.std, &grads);
         let read = values(Tensor::cat(
             vec![
                 l.kl,
                 l.value.detach(),
                 l.surrogate.detach(),
                 l.entropy.detach(),
-                grad_norm_squared(&self.model, &grads),
+                actor_norm,
+                grad_norm_squared(&self.model.critic, &grads),
             ],
             0,
         ));
-        let [kl, value, surrogate, entropy, norm_squared] = read[..] else {
-            unreachable!("five scalars were concatenated")
+        let [kl, value, surrogate, entropy, actor_sq, critic_sq] = read[..] else {
+            unreachable!("six scalars were concatenated")
         };
         if !(value.is_finite() && surrogate.is_finite()) {
             return Err(RlError::NonFinite(format!(
@@ -355,12 +382,20 @@ impl Ppo {
                 self.learning_rate = (self.learning_rate * 1.5).min(1e-2);
             }
         }
-        clip_grad_norm(
-            &self.model,
-            &mut grads,
-            norm_squared.sqrt(),
-            cfg.max_grad_norm,
-        );
+        match cfg.grad_clip {
+            GradClip::Global => clip_grad_norm(
+                &self.model,
+                &mut grads,
+                (actor_sq + critic_sq).sqrt(),
+                cfg.max_grad_norm,
+            ),
+            GradClip::PerNetwork => {
+                let max = cfg.max_grad_norm;
+                clip_grad_norm(&self.model.actor, &mut grads, actor_sq.sqrt(), max);
+                clip_grad_norm(&self.model.std, &mut grads, actor_sq.sqrt(), max);
+                clip_grad_norm(&self.model.critic, &mut grads, critic_sq.sqrt(), max);
+            }
+        }
         let model = self.model.clone();
         self.model = self.optimizer.step(self.learning_rate, model, grads);
         Ok(LossStats {
@@ -414,8 +449,8 @@ pub fn load_model(model: ActorCritic, base: &Path) -> Result<ActorCritic, RlErro
     })
 }
 
-/// The squared global norm of the gradients, `Σ‖g‖²` over every parameter (shape `[1]`).
-fn grad_norm_squared(model: &ActorCritic, grads: &GradientsParams) -> Tensor<1> {
+/// The squared norm of the gradients of `module`'s parameters, `Σ‖g‖²` (shape `[1]`).
+fn grad_norm_squared<M: Module>(module: &M, grads: &GradientsParams) -> Tensor<1> {
     struct SquaredNorm<'a> {
         grads: &'a GradientsParams,
         total: Option<Tensor<1>>,
@@ -432,13 +467,13 @@ fn grad_norm_squared(model: &ActorCritic, grads: &GradientsParams) -> Tensor<1> 
         }
     }
     let mut norm = SquaredNorm { grads, total: None };
-    model.visit(&mut norm);
-    norm.total.expect("the actor-critic has parameters")
+    module.visit(&mut norm);
+    norm.total.expect("the module has parameters")
 }
 
-/// Scales all gradients by `max_norm / (norm + 1e-6)` when their global norm `norm` exceeds
-/// `max_norm` (`torch.nn.utils.clip_grad_norm_`).
-fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, norm: f32, max_norm: f32) {
+/// Scales the gradients of `module`'s parameters by `max_norm / (norm + 1e-6)` when their
+/// norm `norm` exceeds `max_norm` (`torch.nn.utils.clip_grad_norm_`).
+fn clip_grad_norm<M: Module>(module: &M, grads: &mut GradientsParams, norm: f32, max_norm: f32) {
     struct Scale<'a> {
         grads: &'a mut GradientsParams,
         factor: f32,
@@ -452,7 +487,7 @@ fn clip_grad_norm(model: &ActorCritic, grads: &mut GradientsParams, norm: f32, m
     }
     let factor = max_norm / (norm + 1e-6);
     if factor < 1.0 {
-        model.visit(&mut Scale { grads, factor });
+        module.visit(&mut Scale { grads, factor });
     }
 }
 
@@ -533,6 +568,8 @@ mod tests {
             desired_kl: 0.01,
             max_grad_norm: 1.0,
             normalize_advantage_per_mini_batch: false,
+            grad_clip: GradClip::Global,
+            normalize_value: false,
         };
         let device = Device::flex().autodiff();
         let model = ActorCritic::new(&policy, 3, 3, 2, 5, &device);
@@ -584,6 +621,97 @@ mod tests {
         let lp = gaussian_log_prob(&[1.0, 0.0], &[0.0, 0.0], &[1.0, 2.0]);
         let expected = -0.5 - (2.0 * PI).ln() - 2.0f32.ln();
         assert!((lp - expected).abs() < 1e-6);
+    }
+
+    /// Fills the storage with one-step episodes whose rewards are `offset − a₀²`, on random
+    /// observations, and returns the values the critic predicted for them.
+    fn episodic_rollout(p: &mut Ppo, offset: f32, seed: u64) -> Vec<f32> {
+        let (n, t) = (p.storage.num_envs, p.storage.num_steps);
+        let mut rng = EnvRng::new(seed, 0, 99);
+        let mut actions = vec![0.0; n * 2];
+        for _ in 0..t {
+            let obs: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
+            p.act(&obs, &obs, &mut actions).unwrap();
+            let rewards: Vec<f32> = actions.chunks(2).map(|a| offset - a[0] * a[0]).collect();
+            p.process_env_step(&rewards, &vec![true; n], &vec![false; n]);
+        }
+        let predicted = p.storage.values.clone();
+        p.compute_returns(&vec![0.0; n * 3]);
+        predicted
+    }
+
+    /// The mean |V − R| of a second rollout after one update on returns near −260, with and
+    /// without value normalisation (the returns of the second rollout are `offset − a₀²`).
+    fn value_error_after_one_update(normalize_value: bool) -> f32 {
+        let mut p = ppo(64, 2);
+        p.cfg.normalize_value = normalize_value;
+        p.value_normalizer = normalize_value.then(|| EmpiricalNormalizer::new(1, u64::MAX));
+        episodic_rollout(&mut p, -260.0, 1);
+        p.update().unwrap();
+        let predicted = episodic_rollout(&mut p, -260.0, 2);
+        let returns = &p.storage.rewards;
+        let error: f32 = predicted
+            .iter()
+            .zip(returns)
+            .map(|(v, r)| (v - r).abs())
+            .sum();
+        error / predicted.len() as f32
+    }
+
+    /// With value normalisation the untrained critic already predicts the running mean of the
+    /// returns (its output is scaled by their spread, about 1 here): the error is a few units
+    /// against returns of −260. Without it, four Adam steps of 1e-3 leave the critic near its
+    /// initial output, almost 260 away.
+    #[test]
+    fn value_normalisation_puts_the_critic_in_the_returns_units() {
+        let normalised = value_error_after_one_update(true);
+        let raw = value_error_after_one_update(false);
+        assert!(normalised < 0.05 * 260.0, "normalised error {normalised}");
+        assert!(raw > 0.9 * 260.0, "raw error {raw}");
+    }
+
+    /// After `compute_returns` with value normalisation, the first rollout's returns are in
+    /// normalised units: mean 0 and standard deviation `σ/(σ + 0.01)`.
+    #[test]
+    fn normalised_returns_have_zero_mean() {
+        let mut p = ppo(64, 2);
+        p.value_normalizer = Some(EmpiricalNormalizer::new(1, u64::MAX));
+        episodic_rollout(&mut p, -260.0, 3);
+        let r = &p.storage.returns;
+        let mean = r.iter().sum::<f32>() / r.len() as f32;
+        let var = r.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / r.len() as f32;
+        let sigma = p.value_normalizer.as_ref().unwrap().var[0].sqrt();
+        assert!(mean.abs() < 1e-4, "mean {mean}");
+        assert!(
+            (var.sqrt() - sigma / (sigma + 0.01)).abs() < 1e-4,
+            "std {}",
+            var.sqrt()
+        );
+    }
+
+    /// With per-network clipping, the actor's gradient (with the noise parameter) and the
+    /// critic's each end at the limit when both exceed it.
+    #[test]
+    fn gradient_norm_is_clipped_per_network() {
+        let mut p = ppo(16, 4);
+        rollout(&mut p);
+        let l = p.minibatch_losses(whole_rollout(&p));
+        let loss = l.surrogate.mul_scalar(100.0) + l.value.mul_scalar(100.0);
+        let mut grads = GradientsParams::from_grads(loss.backward(), &p.model);
+        let norm = |grads: &GradientsParams, m: &dyn Fn(&GradientsParams) -> Tensor<1>| {
+            m(grads).into_scalar::<f32>().sqrt()
+        };
+        let actor = |g: &GradientsParams| {
+            grad_norm_squared(&p.model.actor, g) + grad_norm_squared(&p.model.std, g)
+        };
+        let critic = |g: &GradientsParams| grad_norm_squared(&p.model.critic, g);
+        let (a, c) = (norm(&grads, &actor), norm(&grads, &critic));
+        assert!(a > 1e-2 && c > 1e-2, "norms {a} {c}");
+        clip_grad_norm(&p.model.actor, &mut grads, a, 1e-2);
+        clip_grad_norm(&p.model.std, &mut grads, a, 1e-2);
+        clip_grad_norm(&p.model.critic, &mut grads, c, 1e-2);
+        assert!((norm(&grads, &actor) - 1e-2).abs() < 1e-6);
+        assert!((norm(&grads, &critic) - 1e-2).abs() < 1e-6);
     }
 
     /// After clipping, the global gradient norm equals the limit.

@@ -79,6 +79,10 @@ pub struct CheckpointState {
     pub obs_normalizer: Option<EmpiricalNormalizer>,
     /// Critic observation statistics, if normalisation is on.
     pub critic_obs_normalizer: Option<EmpiricalNormalizer>,
+    /// Return statistics the critic's output is scaled by, if `normalize_value` is on
+    /// (absent in checkpoints written before the option existed).
+    #[serde(default)]
+    pub value_normalizer: Option<EmpiricalNormalizer>,
 }
 
 /// Trains a policy on a [`VecEnv`] with PPO.
@@ -340,6 +344,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             policy: self.cfg.policy.clone(),
             obs_normalizer: self.obs_normalizer.clone(),
             critic_obs_normalizer: self.critic_normalizer.clone(),
+            value_normalizer: self.alg.value_normalizer.clone(),
         };
         let path = base.with_extension("json");
         let text = serde_json::to_string_pretty(&state).expect("plain data serialises");
@@ -369,6 +374,14 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         self.alg.learning_rate = state.learning_rate;
         self.obs_normalizer = state.obs_normalizer;
         self.critic_normalizer = state.critic_obs_normalizer;
+        if self.alg.cfg.normalize_value {
+            // A checkpoint trained without value normalisation starts fresh statistics.
+            self.alg.value_normalizer = Some(
+                state
+                    .value_normalizer
+                    .unwrap_or_else(|| EmpiricalNormalizer::new(1, u64::MAX)),
+            );
+        }
         self.iteration = state.iteration;
         self.env_steps = state.env_steps;
         self.wall_time = state.wall_time;

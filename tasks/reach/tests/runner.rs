@@ -7,7 +7,11 @@ use orbit_rl::burn::tensor::Device;
 use orbit_rl::{IterationLog, OnPolicyRunner, Policy, RlVecEnv, RunnerCfg, VecEnv};
 use orbit_task_reach::TASK_ID;
 
-fn runner(seed: u64, log_dir: Option<std::path::PathBuf>) -> OnPolicyRunner<RlVecEnv> {
+fn runner(
+    seed: u64,
+    log_dir: Option<std::path::PathBuf>,
+    agent_overrides: &[&str],
+) -> OnPolicyRunner<RlVecEnv> {
     let o = [
         "num_envs=8".to_string(),
         format!("seed={seed}"),
@@ -15,12 +19,13 @@ fn runner(seed: u64, log_dir: Option<std::path::PathBuf>) -> OnPolicyRunner<RlVe
     ];
     let env = RlVecEnv::new(make(TASK_ID, &o).unwrap_or_else(|e| panic!("{e}"))).unwrap();
     let def = orbit_managers::agent_cfg(TASK_ID, "rsl_rl").unwrap();
-    let o = [
+    let mut o = vec![
         format!("seed={seed}"),
         "num_steps_per_env=8".into(),
         "save_interval=2".into(),
         "empirical_normalization=true".into(),
     ];
+    o.extend(agent_overrides.iter().map(|s| s.to_string()));
     let cfg = RunnerCfg::from_ron(def.config, def.file_name, &o).unwrap();
     OnPolicyRunner::new(env, cfg, log_dir, Device::flex()).unwrap()
 }
@@ -41,7 +46,7 @@ fn same_seed_gives_identical_logs() {
     let runs: Vec<Vec<IterationLog>> = [7, 7, 8]
         .iter()
         .map(|&seed| {
-            let mut r = runner(seed, None);
+            let mut r = runner(seed, None, &[]);
             r.learn(3).unwrap();
             r.history.iter().map(timeless).collect()
         })
@@ -59,7 +64,8 @@ fn same_seed_gives_identical_logs() {
 fn checkpoints_restore_the_policy_and_the_run_directory_is_complete() {
     let dir = std::env::temp_dir().join(format!("orbit-reach-ckpt-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let mut r = runner(3, Some(dir.clone()));
+    let value_norm = ["algorithm.normalize_value=true"];
+    let mut r = runner(3, Some(dir.clone()), &value_norm);
     r.learn(4).unwrap();
     for f in [
         "model_1.bpk",
@@ -82,11 +88,19 @@ fn checkpoints_restore_the_policy_and_the_run_directory_is_complete() {
     let obs = r.env.observations().to_vec();
     let loaded = Policy::load(&dir.join("model_3"), Device::flex()).unwrap();
     assert_eq!(loaded.act(&obs), r.inference_policy().act(&obs));
-    // Resuming restores the iteration count, learning rate and normaliser.
-    let mut resumed = runner(3, None);
+    // Resuming restores the iteration count, learning rate and normalisers (observations and
+    // returns).
+    let mut resumed = runner(3, None, &value_norm);
     resumed.load_checkpoint(&dir.join("model_3")).unwrap();
     assert_eq!(resumed.iteration, 4);
     assert_eq!(resumed.alg.learning_rate, r.alg.learning_rate);
+    let returns = r
+        .alg
+        .value_normalizer
+        .as_ref()
+        .expect("value normalisation is on");
+    assert!(returns.count > 0);
+    assert_eq!(resumed.alg.value_normalizer.as_ref(), Some(returns));
     assert_eq!(
         resumed.inference_policy().act(&obs),
         r.inference_policy().act(&obs)
