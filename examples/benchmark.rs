@@ -8,7 +8,11 @@
 //! The arm runs Fancy Gym's torque law with a sinusoidal normalised action per joint
 //! (`τ = clip(10 a + bias, ±τ_max)`, the backend adding the bias forces and clamping at the
 //! effort limits every substep), so the multibody, the box–table contacts and the bias forces
-//! are all exercised every step; the substeps of an env step are one `step_n` call. The full-env column steps the registered task with
+//! are all exercised every step; the substeps of an env step are one `step_n` call. The physics
+//! column reads the state only after the last step (a GPU backend then pipelines the steps and
+//! reads nothing back in between); the next column reads the joint positions after every step,
+//! as an env does, which on the GPU waits for each step and copies the state back. The kernel
+//! columns come from GPU timestamps around the step kernel. The full-env column steps the registered task with
 //! the same kind of actions; its `managers / physics` ratio and the per-phase table come from the
 //! env's own step timings.
 
@@ -100,10 +104,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         args.backend, args.decimation, sim.dt
     );
     println!(
-        "| envs | physics env-steps/s | per thread | full env env-steps/s | managers / physics |"
+        "|  envs | physics env-steps/s | + reading every step | per thread | kernel ms / step | kernel env-steps/s | full env env-steps/s | managers / physics | memory per env |"
     );
     println!(
-        "|-----:|--------------------:|-----------:|---------------------:|-------------------:|"
+        "|------:|--------------------:|---------------------:|-----------:|-----------------:|-------------------:|---------------------:|-------------------:|---------------:|"
     );
     let mut phases = Vec::new();
     for &n in &args.num_envs {
@@ -112,33 +116,67 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // Fancy Gym's law with the backend adding the bias forces every substep.
         backend.set_bias_compensation(0, &(0..dofs).collect::<Vec<_>>(), true)?;
         let mut efforts = vec![0.0f32; n * dofs];
-        let mut run = |backend: &mut Box<dyn orbit::core::physics::PhysicsBackend>,
-                       steps: usize,
-                       t0: usize|
-         -> Result<(), Box<dyn std::error::Error>> {
-            for k in t0..t0 + steps {
-                let t = k as f32 * 0.02;
-                for (i, tau) in efforts.iter_mut().enumerate() {
-                    let a = 0.3 * (2.0 * std::f32::consts::PI * 0.5 * t + (i % dofs) as f32).sin();
-                    *tau = 10.0 * a;
+        // One pass of `steps` env steps from step index `t0`. `read` looks at the state after
+        // every step (the GPU backend then waits for the step and reads it back) and sums the
+        // kernel times the backend reports; otherwise only the last step is read, so the
+        // measured time covers every step's completion.
+        let mut run =
+            |backend: &mut Box<dyn orbit::core::physics::PhysicsBackend>,
+             steps: usize,
+             t0: usize,
+             read: bool|
+             -> Result<(f64, Option<std::time::Duration>), Box<dyn std::error::Error>> {
+                let start = Instant::now();
+                let mut kernel: Option<std::time::Duration> = None;
+                let mut checksum = 0.0f32;
+                for k in t0..t0 + steps {
+                    let t = k as f32 * 0.02;
+                    // The same action in every env: one sine per joint.
+                    let per_joint: Vec<f32> = (0..dofs)
+                        .map(|j| 3.0 * (2.0 * std::f32::consts::PI * 0.5 * t + j as f32).sin())
+                        .collect();
+                    for row in efforts.chunks_exact_mut(dofs) {
+                        row.copy_from_slice(&per_joint);
+                    }
+                    backend.set_joint_efforts(0, &efforts)?;
+                    backend.step_n(args.decimation)?;
+                    if read || k + 1 == t0 + steps {
+                        checksum += backend.articulation(0).joint_pos[0];
+                    }
+                    if read && let Some(t) = backend.last_kernel_time() {
+                        kernel = Some(kernel.unwrap_or_default() + t);
+                    }
                 }
-                backend.set_joint_efforts(0, &efforts)?;
-                backend.step_n(args.decimation)?;
-            }
-            Ok(())
-        };
-        run(&mut backend, 20, 0)?;
-        let start = Instant::now();
-        run(&mut backend, args.steps, 20)?;
-        let secs = start.elapsed().as_secs_f64();
+                if !checksum.is_finite() {
+                    return Err("the simulation diverged".into());
+                }
+                Ok((start.elapsed().as_secs_f64(), kernel))
+            };
+        // Warm up for at least 20 steps and one second, so that a GPU has left its idle
+        // clocks before anything is measured.
+        let warm_up = Instant::now();
+        let mut t0 = 0;
+        while t0 < 20 || warm_up.elapsed().as_secs_f64() < 1.0 {
+            run(&mut backend, 10, t0, false)?;
+            t0 += 10;
+        }
+        let (secs, _) = run(&mut backend, args.steps, t0, false)?;
         let rate = (n * args.steps) as f64 / secs;
+        let (read_secs, kernel) = run(&mut backend, args.steps, t0 + args.steps, true)?;
+        let read_rate = (n * args.steps) as f64 / read_secs;
         let memory = backend.device_memory_bytes() as f64 / n as f64;
         drop(backend);
         let (env_secs, timings) = full_env_seconds(&args, n)?;
         let env_rate = (n * args.steps) as f64 / env_secs;
         let overhead = timings.managers().as_secs_f64() / timings.physics.as_secs_f64();
+        let kernel_ms = kernel.map_or("—".to_string(), |k| {
+            format!("{:.3}", k.as_secs_f64() * 1e3 / args.steps as f64)
+        });
+        let kernel_rate = kernel.map_or("—".to_string(), |k| {
+            format!("{:.0}", (n * args.steps) as f64 / k.as_secs_f64())
+        });
         println!(
-            "| {n:>4} | {rate:>19.0} | {:>10.0} | {env_rate:>20.0} | {:>16.1} % | {:>19.0} B |",
+            "| {n:>5} | {rate:>19.0} | {read_rate:>22.0} | {:>10.0} | {kernel_ms:>16} | {kernel_rate:>18} | {env_rate:>20.0} | {:>16.1} % | {:>12.0} B |",
             rate / threads as f64,
             overhead * 100.0,
             memory

@@ -335,12 +335,14 @@ impl ManagerBasedEnv {
             self.actions.apply(&mut self.scene)?;
             lap(&mut self.timings.actions, clock);
             self.scene.backend.step_n(self.cfg.decimation)?;
+            self.scene.backend.sync();
             lap(&mut self.timings.physics, clock);
         } else {
             for _ in 0..self.cfg.decimation {
                 self.actions.apply(&mut self.scene)?;
                 lap(&mut self.timings.actions, clock);
                 self.scene.backend.step()?;
+                self.scene.backend.sync();
                 lap(&mut self.timings.physics, clock);
             }
         }

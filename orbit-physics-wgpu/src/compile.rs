@@ -3,11 +3,9 @@
 //! can touch) that are baked into the WGSL kernel as constants. Per-env parameters (mass scale,
 //! friction) live in buffers.
 
-use std::fmt::Write as _;
-
-use glam::{Mat3, Quat, Vec3};
+use glam::Vec3;
 use orbit_core::math::Pose;
-use orbit_core::physics::{PhysicsError, SimCfg};
+use orbit_core::physics::PhysicsError;
 use orbit_core::scene::{Geometry, Inertial, JointKind, SceneDesc, Shape};
 
 use crate::BACKEND_NAME;
@@ -17,6 +15,8 @@ use crate::BACKEND_NAME;
 pub const MAX_DOFS: usize = 16;
 /// Largest number of links (all articulations of an env together).
 pub const MAX_LINKS: usize = 32;
+/// Largest number of free rigid objects (a constraint row packs its objects in 8 bits each).
+pub const MAX_OBJECTS: usize = 254;
 /// Contacts kept per env and substep; further candidates replace the shallowest.
 pub const MAX_CONTACTS: usize = 12;
 /// Contacts are generated up to this gap (m) and solved speculatively.
@@ -47,8 +47,6 @@ pub struct LinkData {
 /// A degree of freedom and its drive.
 #[derive(Clone, Debug)]
 pub struct DofData {
-    /// The link this dof moves.
-    pub link: usize,
     /// Rotor inertia added to the mass-matrix diagonal.
     pub armature: f32,
     /// Viscous joint damping.
@@ -81,7 +79,9 @@ pub enum ShapeKind {
 }
 
 impl ShapeKind {
-    fn code(self) -> u32 {
+    /// The kernel's code of this kind: 0 sphere, 1 capsule, 2 box, 3 plane (a pair's first
+    /// shape has the lower code).
+    pub fn code(self) -> u32 {
         match self {
             Self::Sphere => 0,
             Self::Capsule => 1,
@@ -108,6 +108,18 @@ pub struct ShapeData {
     pub priority: i32,
 }
 
+impl ShapeData {
+    /// Radius of a sphere about the shape's origin that holds it (planes: unbounded).
+    pub fn bounding_radius(&self) -> f32 {
+        match self.kind {
+            ShapeKind::Sphere => self.size.x,
+            ShapeKind::Capsule => self.size.x + self.size.y,
+            ShapeKind::Box => self.size.length(),
+            ShapeKind::Plane => f32::INFINITY,
+        }
+    }
+}
+
 /// Two shapes that can touch: `a` is the one whose points are tested (sphere, capsule or box),
 /// `b` the one they are tested against.
 #[derive(Clone, Debug)]
@@ -118,6 +130,33 @@ pub struct PairData {
     pub b: usize,
     /// First contact slot (a slot is a stable id for warm starting).
     pub slot0: usize,
+}
+
+/// The scene's geometry as the narrow phase reads it: one `vec4<f32>` array (a uniform buffer)
+/// holding, from the given offsets, 4 entries per shape, one bounding sphere per body, one entry
+/// per group of pairs and one per pair.
+///
+/// - shape: `(position, body code)`, `rotation`, `(size, bounding radius)`,
+///   `(kind, priority, pose body, 0)`; shapes that never move have their env-frame pose, body
+///   code −1 and pose body −1, the others their pose in the body frame;
+/// - body: `(centre in the body frame, radius)` of a sphere holding all its shapes;
+/// - group: `(side a, side b, first pair, pairs)`, a side being a moving body `b` or a fixed
+///   shape `s` as `−1 − s`: the pairs between two bodies are culled together first;
+/// - pair: `(shape a, shape b, first contact slot, 0)`.
+#[derive(Clone, Debug)]
+pub struct GeometryTable {
+    /// The entries.
+    pub data: Vec<[f32; 4]>,
+    /// First shape entry.
+    pub shapes: usize,
+    /// First body entry.
+    pub bodies: usize,
+    /// First group entry.
+    pub groups: usize,
+    /// First pair entry.
+    pub pairs: usize,
+    /// Number of groups.
+    pub num_groups: usize,
 }
 
 /// The compiled scene.
@@ -232,7 +271,6 @@ impl CompiledScene {
                         )));
                     }
                     dofs.push(DofData {
-                        link: global,
                         armature: j.armature,
                         damping: j.damping,
                         stiffness: drive.stiffness,
@@ -271,6 +309,12 @@ impl CompiledScene {
                 dofs.len()
             )));
         }
+        if scene.rigid_objects.len() > MAX_OBJECTS {
+            return Err(unsupported(format!(
+                "{} free rigid objects per env exceed the kernel's limit of {MAX_OBJECTS}",
+                scene.rigid_objects.len()
+            )));
+        }
         let mut objects = Vec::new();
         for (oi, obj) in scene.rigid_objects.iter().enumerate() {
             objects.push(obj.body.inertial);
@@ -296,7 +340,13 @@ impl CompiledScene {
         for i in 0..shapes.len() {
             for j in i + 1..shapes.len() {
                 let (si, sj) = (&shapes[i], &shapes[j]);
-                if si.body.is_none() && sj.body.is_none() || si.body == sj.body {
+                // Shapes that never move (static, or on a root link welded to the env frame)
+                // cannot make a contact that changes anything.
+                let fixed = |s: &ShapeData| {
+                    s.body
+                        .is_none_or(|b| b < links.len() && links[b].parent.is_none())
+                };
+                if fixed(si) && fixed(sj) || si.body == sj.body {
                     continue;
                 }
                 let (fi, fj) = (shape_filters[i], shape_filters[j]);
@@ -341,334 +391,98 @@ impl CompiledScene {
         self.links.len() + self.objects.len()
     }
 
-    /// The WGSL constants and tables of this scene (independent of the number of envs).
-    pub fn wgsl_prelude(&self, sim: &SimCfg) -> String {
-        let mut s = String::new();
-        let nl = self.links.len();
-        let nd = self.dofs.len();
-        let no = self.objects.len();
-        let ns = self.shapes.len();
-        let np = self.pairs.len();
-        let c = |s: &mut String, name: &str, v: String| {
-            writeln!(s, "const {name} = {v};").expect("write to string");
-        };
-        c(&mut s, "NL", format!("{nl}u"));
-        c(&mut s, "ND", format!("{nd}u"));
-        c(&mut s, "NO", format!("{no}u"));
-        c(&mut s, "NS", format!("{ns}u"));
-        c(&mut s, "NP", format!("{np}u"));
-        c(&mut s, "NB", format!("{}u", self.num_bodies()));
-        // Array lengths must be at least 1.
-        c(&mut s, "NL1", format!("{}u", nl.max(1)));
-        c(&mut s, "ND1", format!("{}u", nd.max(1)));
-        c(&mut s, "NO1", format!("{}u", no.max(1)));
-        c(&mut s, "NS1", format!("{}u", ns.max(1)));
-        c(&mut s, "NP1", format!("{}u", np.max(1)));
-        c(&mut s, "NDD", format!("{}u", (nd * nd).max(1)));
-        c(&mut s, "MAX_C", format!("{MAX_CONTACTS}u"));
-        c(&mut s, "DT", f(sim.dt));
-        c(&mut s, "GRAVITY", v3(sim.gravity));
-        c(&mut s, "ITERATIONS", format!("{}u", sim.solver_iterations));
-        c(&mut s, "MARGIN", f(CONTACT_MARGIN));
-        c(&mut s, "OMEGA", f(CONTACT_OMEGA));
-        c(&mut s, "ZETA", f(CONTACT_ZETA));
-        let arr = |s: &mut String, name: &str, ty: &str, len: &str, items: Vec<String>| {
-            let items = if items.is_empty() {
-                vec![zero(ty)]
+    /// Whether body `b` (a link, or `num_links + o` for a free object) never moves: the root
+    /// link of an articulation, welded to the env frame.
+    pub fn is_fixed_body(&self, b: usize) -> bool {
+        b < self.links.len() && self.links[b].parent.is_none()
+    }
+
+    /// A sphere in body `b`'s frame that holds all of its shapes: `(centre, radius)`.
+    pub fn body_sphere(&self, b: usize) -> (Vec3, f32) {
+        let spheres: Vec<(Vec3, f32)> = self
+            .shapes
+            .iter()
+            .filter(|s| s.body == Some(b))
+            .map(|s| (s.pose.pos, s.bounding_radius()))
+            .collect();
+        let center = spheres.iter().map(|(c, _)| *c).sum::<Vec3>() / spheres.len().max(1) as f32;
+        let radius = spheres
+            .iter()
+            .map(|(c, r)| c.distance(center) + r)
+            .fold(0.0, f32::max);
+        (center, radius)
+    }
+
+    /// Where shape `s` is in the env frame while its body is at its initial pose (for shapes
+    /// that never move, where they always are).
+    pub fn shape_world_pose(&self, s: usize) -> Pose {
+        let shape = &self.shapes[s];
+        match shape.body {
+            Some(b) if b < self.links.len() => self.links[b].origin.mul_pose(&shape.pose),
+            _ => shape.pose,
+        }
+    }
+
+    /// The geometry table the narrow phase loops over (see [`GeometryTable`]).
+    pub fn geometry_table(&self) -> GeometryTable {
+        let fixed = |s: &ShapeData| s.body.is_none_or(|b| self.is_fixed_body(b));
+        let mut data = Vec::new();
+        for (i, shape) in self.shapes.iter().enumerate() {
+            let (pose, code, pose_body) = if fixed(shape) {
+                (self.shape_world_pose(i), -1.0, -1.0)
             } else {
-                items
+                let b = shape.body.expect("moving shapes have a body") as f32;
+                (shape.pose, b, b)
             };
-            writeln!(
-                s,
-                "var<private> {name}: array<{ty}, {len}> = array<{ty}, {len}>({});",
-                items.join(", ")
-            )
-            .expect("write to string");
+            let p = pose.pos;
+            let q = pose.rot;
+            data.push([p.x, p.y, p.z, code]);
+            data.push([q.x, q.y, q.z, q.w]);
+            let r = shape.bounding_radius().min(3.4e38);
+            data.push([shape.size.x, shape.size.y, shape.size.z, r]);
+            data.push([
+                shape.kind.code() as f32,
+                shape.priority as f32,
+                pose_body,
+                0.0,
+            ]);
+        }
+        let bodies = data.len();
+        for b in 0..self.num_bodies() {
+            let (c, r) = self.body_sphere(b);
+            data.push([c.x, c.y, c.z, r]);
+        }
+        // Group the pairs by the moving bodies (or fixed shapes) they join, in order of first
+        // appearance.
+        let side = |s: usize| match self.shapes[s].body {
+            Some(b) if !fixed(&self.shapes[s]) => b as i64,
+            _ => -1 - s as i64,
         };
-        let links = &self.links;
-        arr(
-            &mut s,
-            "L_PARENT",
-            "i32",
-            "NL1",
-            links
-                .iter()
-                .map(|l| format!("{}", l.parent.map_or(-1, |p| p as i64)))
-                .collect(),
-        );
-        arr(
-            &mut s,
-            "L_DOF",
-            "i32",
-            "NL1",
-            links
-                .iter()
-                .map(|l| format!("{}", l.dof.map_or(-1, |d| d as i64)))
-                .collect(),
-        );
-        let kind = |k: JointKind| match k {
-            JointKind::Fixed => 0u32,
-            JointKind::Revolute => 1,
-            JointKind::Prismatic => 2,
-        };
-        arr(
-            &mut s,
-            "L_KIND",
-            "u32",
-            "NL1",
-            links.iter().map(|l| format!("{}u", kind(l.kind))).collect(),
-        );
-        arr(
-            &mut s,
-            "L_OPOS",
-            "vec3<f32>",
-            "NL1",
-            links.iter().map(|l| v3(l.origin.pos)).collect(),
-        );
-        arr(
-            &mut s,
-            "L_OROT",
-            "vec4<f32>",
-            "NL1",
-            links.iter().map(|l| q4(l.origin.rot)).collect(),
-        );
-        arr(
-            &mut s,
-            "L_AXIS",
-            "vec3<f32>",
-            "NL1",
-            links.iter().map(|l| v3(l.axis)).collect(),
-        );
-        arr(
-            &mut s,
-            "L_MASS",
-            "f32",
-            "NL1",
-            links.iter().map(|l| f(l.inertial.mass)).collect(),
-        );
-        arr(
-            &mut s,
-            "L_COM",
-            "vec3<f32>",
-            "NL1",
-            links.iter().map(|l| v3(l.inertial.com)).collect(),
-        );
-        arr(
-            &mut s,
-            "L_INERTIA",
-            "mat3x3<f32>",
-            "NL1",
-            links.iter().map(|l| m3(l.inertial.inertia)).collect(),
-        );
-        let dofs = &self.dofs;
-        arr(
-            &mut s,
-            "D_LINK",
-            "u32",
-            "ND1",
-            dofs.iter().map(|d| format!("{}u", d.link)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_ARMATURE",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.armature)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_DAMPING",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.damping)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_K",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.stiffness)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_D",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.drive_damping)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_EFFORT",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.effort_limit)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_VMAX",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.velocity_limit)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_LOWER",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.lower)).collect(),
-        );
-        arr(
-            &mut s,
-            "D_UPPER",
-            "f32",
-            "ND1",
-            dofs.iter().map(|d| f(d.upper)).collect(),
-        );
-        let objs = &self.objects;
-        arr(
-            &mut s,
-            "O_MASS",
-            "f32",
-            "NO1",
-            objs.iter().map(|o| f(o.mass)).collect(),
-        );
-        arr(
-            &mut s,
-            "O_COM",
-            "vec3<f32>",
-            "NO1",
-            objs.iter().map(|o| v3(o.com)).collect(),
-        );
-        arr(
-            &mut s,
-            "O_INERTIA",
-            "mat3x3<f32>",
-            "NO1",
-            objs.iter().map(|o| m3(o.inertia)).collect(),
-        );
-        let shapes = &self.shapes;
-        arr(
-            &mut s,
-            "S_BODY",
-            "i32",
-            "NS1",
-            shapes
-                .iter()
-                .map(|x| format!("{}", x.body.map_or(-1, |b| b as i64)))
-                .collect(),
-        );
-        arr(
-            &mut s,
-            "S_KIND",
-            "u32",
-            "NS1",
-            shapes
-                .iter()
-                .map(|x| format!("{}u", x.kind.code()))
-                .collect(),
-        );
-        arr(
-            &mut s,
-            "S_POS",
-            "vec3<f32>",
-            "NS1",
-            shapes.iter().map(|x| v3(x.pose.pos)).collect(),
-        );
-        arr(
-            &mut s,
-            "S_ROT",
-            "vec4<f32>",
-            "NS1",
-            shapes.iter().map(|x| q4(x.pose.rot)).collect(),
-        );
-        arr(
-            &mut s,
-            "S_SIZE",
-            "vec3<f32>",
-            "NS1",
-            shapes.iter().map(|x| v3(x.size)).collect(),
-        );
-        // Bounding-sphere radius about the shape origin (planes: unbounded), for pair culling.
-        let radius = |x: &ShapeData| match x.kind {
-            ShapeKind::Sphere => x.size.x,
-            ShapeKind::Capsule => x.size.x + x.size.y,
-            ShapeKind::Box => x.size.length(),
-            ShapeKind::Plane => f32::INFINITY,
-        };
-        arr(
-            &mut s,
-            "S_RADIUS",
-            "f32",
-            "NS1",
-            shapes.iter().map(|x| f(radius(x))).collect(),
-        );
-        arr(
-            &mut s,
-            "S_PRIORITY",
-            "i32",
-            "NS1",
-            shapes.iter().map(|x| format!("{}", x.priority)).collect(),
-        );
-        let pairs = &self.pairs;
-        arr(
-            &mut s,
-            "P_A",
-            "u32",
-            "NP1",
-            pairs.iter().map(|p| format!("{}u", p.a)).collect(),
-        );
-        arr(
-            &mut s,
-            "P_B",
-            "u32",
-            "NP1",
-            pairs.iter().map(|p| format!("{}u", p.b)).collect(),
-        );
-        arr(
-            &mut s,
-            "P_SLOT",
-            "u32",
-            "NP1",
-            pairs.iter().map(|p| format!("{}u", p.slot0)).collect(),
-        );
-        s
-    }
-}
-
-fn f(x: f32) -> String {
-    if x.is_infinite() {
-        // WGSL has no infinity literal; 3.4e38 behaves the same in every comparison we make.
-        return if x > 0.0 {
-            "3.4e38".into()
-        } else {
-            "-3.4e38".into()
-        };
-    }
-    format!("{x:?}")
-}
-
-fn v3(v: Vec3) -> String {
-    format!("vec3<f32>({}, {}, {})", f(v.x), f(v.y), f(v.z))
-}
-
-fn q4(q: Quat) -> String {
-    format!("vec4<f32>({}, {}, {}, {})", f(q.x), f(q.y), f(q.z), f(q.w))
-}
-
-fn m3(m: Mat3) -> String {
-    format!(
-        "mat3x3<f32>({}, {}, {})",
-        v3(m.x_axis),
-        v3(m.y_axis),
-        v3(m.z_axis)
-    )
-}
-
-fn zero(ty: &str) -> String {
-    match ty {
-        "f32" => "0.0".into(),
-        "i32" => "0".into(),
-        "u32" => "0u".into(),
-        other => format!("{other}()"),
+        let mut grouped: Vec<((i64, i64), Vec<&PairData>)> = Vec::new();
+        for p in &self.pairs {
+            let key = (side(p.a), side(p.b));
+            match grouped.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, v)) => v.push(p),
+                None => grouped.push((key, vec![p])),
+            }
+        }
+        let groups = data.len();
+        let mut first = 0;
+        for ((a, b), pairs) in &grouped {
+            data.push([*a as f32, *b as f32, first as f32, pairs.len() as f32]);
+            first += pairs.len();
+        }
+        let pairs = data.len();
+        for p in grouped.iter().flat_map(|(_, v)| v) {
+            data.push([p.a as f32, p.b as f32, p.slot0 as f32, 0.0]);
+        }
+        GeometryTable {
+            data,
+            shapes: 0,
+            bodies,
+            groups,
+            pairs,
+            num_groups: grouped.len(),
+        }
     }
 }

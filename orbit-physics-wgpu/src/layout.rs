@@ -168,8 +168,7 @@ impl BufferLayout {
     }
 }
 
-/// The positions of the `lay` table's parts and the env-count-independent address tables, as
-/// WGSL constants.
+/// The positions of the `lay` table's parts, as WGSL constants.
 pub fn lay_constants(scene: &CompiledScene) -> String {
     let (nd, nl) = (scene.dofs.len(), scene.links.len());
     let mut s = String::new();
@@ -186,29 +185,5 @@ pub fn lay_constants(scene: &CompiledScene) -> String {
     c("LAY_D_IBASE", 5 + 2 * nd);
     c("LAY_L_BLOCK", 5 + 3 * nd);
     c("LAY_O_BLOCK", 5 + 3 * nd + nl);
-    c("NB1", scene.num_bodies().max(1));
-    let mut d_stride = Vec::new();
-    let (mut l_na, mut l_local) = (Vec::new(), Vec::new());
-    for &(_, links, _, dofs) in &scene.articulations {
-        d_stride.extend(std::iter::repeat_n(dofs, dofs));
-        l_na.extend(std::iter::repeat_n(links, links));
-        l_local.extend(0..links);
-    }
-    let mut table = |name: &str, len: &str, v: &[usize]| {
-        let items: Vec<String> = if v.is_empty() {
-            vec!["0u".into()]
-        } else {
-            v.iter().map(|x| format!("{x}u")).collect()
-        };
-        writeln!(
-            s,
-            "var<private> {name}: array<u32, {len}> = array<u32, {len}>({});",
-            items.join(", ")
-        )
-        .expect("write to string");
-    };
-    table("D_STRIDE", "ND1", &d_stride);
-    table("L_NA", "NL1", &l_na);
-    table("L_LOCAL", "NL1", &l_local);
     s
 }

@@ -1,16 +1,19 @@
 //! orbit-physics-wgpu: the GPU physics backend. Every env is one invocation of a WGSL compute
 //! kernel that runs reduced-coordinate articulation dynamics (RNEA, CRBA, Cholesky), free rigid
 //! bodies, primitive contacts and a projected Gauss–Seidel solver with soft constraints and warm
-//! starting (see `src/step.wgsl` and `docs/physics.md`). All envs share one topology, compiled
-//! into the kernel's constants; state stays on the GPU between steps and is read back once per
-//! step in exactly the layout the batched views expose.
+//! starting (see `docs/physics.md`). All envs share one topology: `codegen.rs` writes the
+//! scene-specific half of the kernel as straight-line code, `step.wgsl` is the rest. State stays
+//! on the GPU between steps and is read back, in exactly the layout the batched views expose,
+//! when it is first looked at after a step (`mirror.rs`).
 //!
 //! Determinism: each env is computed by a fixed sequence of operations in one invocation, with
 //! no atomics; the same inputs give the same bits on the same device.
 
+mod codegen;
 mod compile;
 mod gpu;
 mod layout;
+mod mirror;
 
 use std::sync::Arc;
 
@@ -21,12 +24,14 @@ use orbit_core::physics::{
     check_values,
 };
 use orbit_core::scene::{RootState, SceneDesc};
+use rayon::prelude::*;
 
 pub use compile::{MAX_CONTACTS, MAX_DOFS, MAX_LINKS};
 pub use gpu::{Gpu, gpu};
 
 use compile::CompiledScene;
 use layout::BufferLayout;
+use mirror::HostMirror;
 
 /// Name under which this backend is registered.
 pub const BACKEND_NAME: &str = "wgpu";
@@ -39,7 +44,9 @@ inventory::submit! {
     }
 }
 
-const WORKGROUP: usize = 64;
+/// Invocations (envs) per workgroup: one warp, so that a few thousand envs already spread
+/// over every multiprocessor (with 64, 4 096 envs would leave half of an H100's 132 idle).
+const WORKGROUP: usize = 32;
 
 /// The GPU backend.
 pub struct WgpuBackend {
@@ -54,15 +61,37 @@ pub struct WgpuBackend {
     inputs_buf: wgpu::Buffer,
     params_buf: wgpu::Buffer,
     staging: wgpu::Buffer,
-    /// Mirror of the state buffer after the last readback (16-byte aligned for `Quat` views).
-    state: Vec<Vec4>,
+    /// The host's copy of the state buffer, read back when first looked at after a dispatch
+    /// (16-byte aligned for `Quat` views).
+    state: HostMirror,
+    /// The last dispatch, until the next one has been submitted and waits for it.
+    pending: Option<wgpu::SubmissionIndex>,
+    /// Receives the step kernel's two timestamps.
+    timestamps: wgpu::Buffer,
     /// Mirror of the input buffer.
     inputs: Vec<f32>,
-    inputs_dirty: bool,
+    /// Ranges of `inputs` written since the last upload (only those are sent: per-step targets
+    /// and efforts, not the per-env parameters that rarely change).
+    dirty: Vec<std::ops::Range<usize>>,
+    /// Some env was marked fresh: clear the flags after the next dispatch.
+    fresh_pending: bool,
     /// Default masses of links then objects, for mass scales.
     default_masses: Vec<f32>,
     /// Entries of the layout table.
     lay_len: usize,
+    /// Timestamps around the step kernel, on devices that have them.
+    timer: Option<KernelTimer>,
+    /// `timestamps` holds the kernel times of a dispatch that ran substeps.
+    timed: bool,
+}
+
+/// Two GPU timestamps around the step kernel, resolved into a buffer that is read back with
+/// the state.
+struct KernelTimer {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    /// Nanoseconds per timestamp tick.
+    period_ns: f64,
 }
 
 fn err(reason: String) -> PhysicsError {
@@ -104,12 +133,18 @@ impl WgpuBackend {
                 max_binding
             )));
         }
-        let source = format!(
-            "{}{}{}",
-            scene.wgsl_prelude(sim),
-            layout::lay_constants(&scene),
-            include_str!("step.wgsl")
-        );
+        let mut geometry = scene.geometry_table().data;
+        if geometry.is_empty() {
+            geometry.push([0.0; 4]);
+        }
+        let geometry_bytes = (geometry.len() * 16) as u64;
+        if geometry_bytes > limits.max_uniform_buffer_binding_size {
+            return Err(err(format!(
+                "the scene's geometry table needs {geometry_bytes} bytes, more than the device's {}-byte uniform buffers: use fewer shapes or collision pairs",
+                limits.max_uniform_buffer_binding_size
+            )));
+        }
+        let source = codegen::kernel_source(&scene, sim, WORKGROUP);
         let pipeline = gpu.pipeline(&source);
         let device = &gpu.device;
         let storage = |label: &str, floats: usize| {
@@ -129,18 +164,47 @@ impl WgpuBackend {
         let lay_buf = storage("orbit layout", table.len());
         gpu.queue
             .write_buffer(&lay_buf, 0, bytemuck::cast_slice(&table));
+        let geometry_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("orbit geometry"),
+            size: geometry_bytes,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        gpu.queue
+            .write_buffer(&geometry_buf, 0, bytemuck::cast_slice(&geometry));
         let params_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("orbit params"),
             size: 16,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("orbit readback"),
-            size: (buffers.state_len * 4) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let timer = device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            .then(|| KernelTimer {
+                queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("orbit step timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                }),
+                resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("orbit step timestamps"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }),
+                period_ns: f64::from(gpu.queue.get_timestamp_period()),
+            });
+        let readback = |label: &str, size: usize| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let staging = readback("orbit readback", buffers.state_len * 4);
+        let timestamps = readback("orbit step timestamps", 16);
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("orbit step"),
             layout: &pipeline.get_bind_group_layout(0),
@@ -165,6 +229,10 @@ impl WgpuBackend {
                     binding: 4,
                     resource: lay_buf.as_entire_binding(),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: geometry_buf.as_entire_binding(),
+                },
             ],
         });
         let default_masses = scene
@@ -184,12 +252,17 @@ impl WgpuBackend {
             inputs_buf,
             params_buf,
             staging,
-            state: vec![Vec4::ZERO; buffers.state_len.div_ceil(4)],
+            state: HostMirror::new(buffers.state_len.div_ceil(4)),
+            pending: None,
+            timestamps,
             inputs: vec![0.0; buffers.inputs_len],
-            inputs_dirty: true,
+            dirty: std::iter::once(0..buffers.inputs_len).collect(),
+            fresh_pending: false,
             default_masses,
             lay_len: table.len(),
             buffers,
+            timer,
+            timed: false,
         };
         backend.init_state(desc);
         backend.upload_state();
@@ -203,12 +276,65 @@ impl WgpuBackend {
         &self.gpu.info
     }
 
+    /// The published state, read back first if a dispatch ran since it was last read.
     fn state_f32(&self) -> &[f32] {
-        bytemuck::cast_slice(&self.state)
+        bytemuck::cast_slice(self.state.get(|dst| self.read_back(dst)))
     }
 
+    /// The host copy of the state for host-side writes (current first, so that rows written
+    /// back in the same span as the written envs hold the GPU's values).
     fn state_f32_mut(&mut self) -> &mut [f32] {
-        bytemuck::cast_slice_mut(&mut self.state)
+        self.state_f32();
+        bytemuck::cast_slice_mut(self.state.get_mut())
+    }
+
+    /// Waits for `slice` of a readback buffer to be mapped (after the dispatch that fills it).
+    /// The views cannot return errors: a GPU lost while reading back is a panic.
+    fn map_read(&self, slice: &wgpu::BufferSlice<'_>) {
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.gpu
+            .device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .unwrap_or_else(|e| panic!("the GPU did not finish the physics step: {e}"));
+    }
+
+    /// Copies the last dispatch's published state into `dst`.
+    fn read_back(&self, dst: &mut [Vec4]) {
+        let bytes = (self.buffers.state_len * 4) as u64;
+        let slice = self.staging.slice(..bytes);
+        self.map_read(&slice);
+        {
+            let view = slice
+                .get_mapped_range()
+                .unwrap_or_else(|e| panic!("reading the physics state back failed: {e}"));
+            let len = self.buffers.state_len;
+            let state: &mut [f32] = bytemuck::cast_slice_mut(dst);
+            let src: &[f32] = bytemuck::cast_slice(&view);
+            // Tens of megabytes at 65 536 envs: copy on every core.
+            const CHUNK: usize = 1 << 16;
+            state[..len]
+                .par_chunks_mut(CHUNK)
+                .zip(src.par_chunks(CHUNK))
+                .for_each(|(to, from)| to.copy_from_slice(from));
+        }
+        self.staging.unmap();
+    }
+
+    /// Waits for the dispatch before the one just submitted (see `dispatch`).
+    fn wait_for_pending(&mut self) -> Result<(), PhysicsError> {
+        if let Some(index) = self.pending.take() {
+            self.gpu
+                .device
+                .poll(wgpu::PollType::Wait {
+                    submission_index: Some(index),
+                    timeout: None,
+                })
+                .map_err(|e| err(format!("the GPU did not finish the step: {e}")))?;
+        }
+        Ok(())
     }
 
     /// Default joint state, object root states, unit mass scales and the shapes' frictions.
@@ -262,18 +388,53 @@ impl WgpuBackend {
             .write_buffer(&self.state_buf, 0, bytemuck::cast_slice(self.state_f32()));
     }
 
-    fn upload_inputs(&mut self) {
-        if self.inputs_dirty {
-            self.gpu
-                .queue
-                .write_buffer(&self.inputs_buf, 0, bytemuck::cast_slice(&self.inputs));
-            self.inputs_dirty = false;
+    /// Uploads the rows of `env_ids` in each state section `(first float, floats per env)`:
+    /// per section the span from the lowest to the highest env written.
+    fn upload_state_rows(&self, env_ids: &[usize], sections: &[(usize, usize)]) {
+        let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
+            return;
+        };
+        for &(start, width) in sections {
+            let range = start + lo * width..start + (hi + 1) * width;
+            self.gpu.queue.write_buffer(
+                &self.state_buf,
+                (range.start * 4) as u64,
+                bytemuck::cast_slice(&self.state_f32()[range]),
+            );
         }
+    }
+
+    fn upload_inputs(&mut self) {
+        let mut ranges = std::mem::take(&mut self.dirty);
+        ranges.sort_by_key(|r| r.start);
+        let mut merged: Vec<std::ops::Range<usize>> = Vec::with_capacity(ranges.len());
+        for r in ranges {
+            match merged.last_mut() {
+                Some(last) if r.start <= last.end => last.end = last.end.max(r.end),
+                _ => merged.push(r),
+            }
+        }
+        for r in merged {
+            self.gpu.queue.write_buffer(
+                &self.inputs_buf,
+                (r.start * 4) as u64,
+                bytemuck::cast_slice(&self.inputs[r]),
+            );
+        }
+        // Reuse the allocation.
+        self.dirty = Vec::with_capacity(4);
+    }
+
+    /// Marks `len` inputs from `start` for the next upload.
+    fn mark(&mut self, start: usize, len: usize) {
+        self.dirty.push(start..start + len);
     }
 
     /// Runs `substeps` substeps (0: only recompute what is published) and reads the state back.
     fn dispatch(&mut self, substeps: u32) -> Result<(), PhysicsError> {
         self.upload_inputs();
+        // Steps (not republishes) are timed.
+        let timer = self.timer.as_ref().filter(|_| substeps > 0);
         let gpu = self.gpu.clone();
         let queue = &gpu.queue;
         queue.write_buffer(
@@ -286,9 +447,14 @@ impl WgpuBackend {
             label: Some("orbit step"),
         });
         {
+            let timestamp_writes = timer.map(|t| wgpu::ComputePassTimestampWrites {
+                query_set: &t.queries,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            });
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("orbit step"),
-                timestamp_writes: None,
+                timestamp_writes,
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.bind_group, &[]);
@@ -296,29 +462,24 @@ impl WgpuBackend {
         }
         let bytes = (self.buffers.state_len * 4) as u64;
         encoder.copy_buffer_to_buffer(&self.state_buf, 0, &self.staging, 0, bytes);
-        queue.submit([encoder.finish()]);
-        let slice = self.staging.slice(..bytes);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            })
-            .map_err(|e| err(format!("the GPU did not finish the step: {e}")))?;
-        {
-            let view = slice
-                .get_mapped_range()
-                .map_err(|e| err(format!("reading the state back failed: {e}")))?;
-            let len = self.buffers.state_len;
-            let state: &mut [f32] = bytemuck::cast_slice_mut(&mut self.state);
-            state[..len].copy_from_slice(bytemuck::cast_slice(&view));
+        if let Some(t) = timer {
+            encoder.resolve_query_set(&t.queries, 0..2, &t.resolved, 0);
+            encoder.copy_buffer_to_buffer(&t.resolved, 0, &self.timestamps, 0, 16);
         }
-        self.staging.unmap();
+        // Submit this step, then wait for the one before it: the GPU always has the next
+        // step queued, and at most two are in flight.
+        let submitted = queue.submit([encoder.finish()]);
+        if timer.is_some() {
+            self.timed = true;
+        }
+        self.state.invalidate();
+        self.wait_for_pending()?;
+        self.pending = Some(submitted);
         // Fresh flags apply to one dispatch.
-        let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
-        if self.inputs[fresh..fresh + n].iter().any(|&f| f != 0.0) {
+        if std::mem::take(&mut self.fresh_pending) {
+            let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
             self.inputs[fresh..fresh + n].fill(0.0);
-            self.inputs_dirty = true;
+            self.mark(fresh, n);
         }
         Ok(())
     }
@@ -327,18 +488,25 @@ impl WgpuBackend {
     fn refresh_all(&mut self) -> Result<(), PhysicsError> {
         let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
         self.inputs[fresh..fresh + n].fill(1.0);
-        self.inputs_dirty = true;
+        self.mark(fresh, n);
+        self.fresh_pending = true;
         self.dispatch(0)
     }
 
-    /// After a state write: drop warm starts of those envs and republish.
-    fn after_write(&mut self, env_ids: &[usize]) -> Result<(), PhysicsError> {
+    /// After a state write to `sections` (see [`upload_state_rows`](Self::upload_state_rows)):
+    /// upload those rows, drop the warm starts of the envs and republish.
+    fn after_write(
+        &mut self,
+        env_ids: &[usize],
+        sections: &[(usize, usize)],
+    ) -> Result<(), PhysicsError> {
         let fresh = self.buffers.fresh;
         for &e in env_ids {
             self.inputs[fresh + e] = 1.0;
         }
-        self.inputs_dirty = true;
-        self.upload_state();
+        self.mark(fresh, self.buffers.num_envs);
+        self.fresh_pending = true;
+        self.upload_state_rows(env_ids, sections);
         self.dispatch(0)
     }
 
@@ -363,7 +531,7 @@ impl WgpuBackend {
         check_batch(what, values, self.buffers.num_envs, off.dofs)?;
         let start = off.inputs + k * off.joint_len;
         self.inputs[start..start + values.len()].copy_from_slice(values);
-        self.inputs_dirty = true;
+        self.mark(start, values.len());
         Ok(())
     }
 
@@ -411,6 +579,25 @@ impl PhysicsBackend for WgpuBackend {
 
     fn dt(&self) -> f32 {
         self.sim.dt
+    }
+
+    fn sync(&self) {
+        self.state_f32();
+    }
+
+    fn last_kernel_time(&self) -> Option<std::time::Duration> {
+        let t = self.timer.as_ref().filter(|_| self.timed)?;
+        let slice = self.timestamps.slice(..);
+        self.map_read(&slice);
+        let ticks: [u64; 2] = {
+            let view = slice
+                .get_mapped_range()
+                .unwrap_or_else(|e| panic!("reading the kernel timestamps back failed: {e}"));
+            bytemuck::pod_read_unaligned(&view)
+        };
+        self.timestamps.unmap();
+        let ns = ticks[1].saturating_sub(ticks[0]) as f64 * t.period_ns;
+        Some(std::time::Duration::from_nanos(ns as u64))
     }
 
     fn device_memory_bytes(&self) -> usize {
@@ -494,7 +681,7 @@ impl PhysicsBackend for WgpuBackend {
         for &d in dofs {
             self.inputs[self.buffers.compensate + first + d] = if enabled { 1.0 } else { 0.0 };
         }
-        self.inputs_dirty = true;
+        self.mark(self.buffers.compensate, self.scene.dofs.len());
         Ok(())
     }
 
@@ -517,7 +704,8 @@ impl PhysicsBackend for WgpuBackend {
             let row = row + off.joint_len;
             s[row..row + dofs].copy_from_slice(&vel[i * dofs..(i + 1) * dofs]);
         }
-        self.after_write(env_ids)
+        let sections = [(off.joints, dofs), (off.joints + off.joint_len, dofs)];
+        self.after_write(env_ids, &sections)
     }
 
     fn write_root_state(
@@ -530,7 +718,9 @@ impl PhysicsBackend for WgpuBackend {
         check_env_ids(env_ids, self.buffers.num_envs)?;
         check_root_states(states, env_ids.len())?;
         self.put_root_states(o, env_ids, states);
-        self.after_write(env_ids)
+        let off = &self.buffers.objects[o];
+        let sections = [(off.pos, 3), (off.quat, 4), (off.lin, 3), (off.ang, 3)];
+        self.after_write(env_ids, &sections)
     }
 
     fn set_masses(
@@ -552,7 +742,7 @@ impl PhysicsBackend for WgpuBackend {
         for (&e, &m) in env_ids.iter().zip(masses) {
             self.inputs[self.buffers.mass_scale + e * bodies + b] = m / default;
         }
-        self.inputs_dirty = true;
+        self.mark(self.buffers.mass_scale, self.buffers.num_envs * bodies);
         // Bias forces depend on the masses: republish.
         self.dispatch(0)
     }
@@ -574,7 +764,7 @@ impl PhysicsBackend for WgpuBackend {
                 }
             }
         }
-        self.inputs_dirty = true;
+        self.mark(self.buffers.friction, self.buffers.num_envs * shapes);
         Ok(())
     }
 }

@@ -209,6 +209,18 @@ pub trait PhysicsBackend: Send + Sync {
         0
     }
 
+    /// Makes the views show the last step's state now. A backend that runs its steps
+    /// asynchronously (the GPU backend reads its state back only when it is looked at) waits
+    /// here; the views would do the same on first use, so calling this only decides where the
+    /// wait is spent (the env counts it as physics time). CPU backends have nothing to do.
+    fn sync(&self) {}
+
+    /// Accelerator time the last step (or `step_n`) spent in its kernels, where the backend
+    /// measures it (`None` for CPU backends and devices without timestamp queries).
+    fn last_kernel_time(&self) -> Option<std::time::Duration> {
+        None
+    }
+
     /// Advances every env by `n` time steps with the current inputs: an env step's decimation
     /// loop when no input changes in between (a GPU backend runs them in one dispatch, with one
     /// readback).
