@@ -176,6 +176,16 @@ pub struct CompiledScene {
     pub pairs: Vec<PairData>,
 }
 
+/// Whether body `b` is the root link of an articulation (welded to the env frame).
+fn is_root_link(links: &[LinkData], b: usize) -> bool {
+    links.get(b).is_some_and(|l| l.parent.is_none())
+}
+
+/// Whether a shape never moves: static, or on a root link.
+fn never_moves(links: &[LinkData], shape: &ShapeData) -> bool {
+    shape.body.is_none_or(|b| is_root_link(links, b))
+}
+
 fn unsupported(reason: String) -> PhysicsError {
     PhysicsError::Unsupported {
         backend: BACKEND_NAME.into(),
@@ -340,13 +350,8 @@ impl CompiledScene {
         for i in 0..shapes.len() {
             for j in i + 1..shapes.len() {
                 let (si, sj) = (&shapes[i], &shapes[j]);
-                // Shapes that never move (static, or on a root link welded to the env frame)
-                // cannot make a contact that changes anything.
-                let fixed = |s: &ShapeData| {
-                    s.body
-                        .is_none_or(|b| b < links.len() && links[b].parent.is_none())
-                };
-                if fixed(si) && fixed(sj) || si.body == sj.body {
+                // Shapes that never move cannot make a contact that changes anything.
+                if never_moves(&links, si) && never_moves(&links, sj) || si.body == sj.body {
                     continue;
                 }
                 let (fi, fj) = (shape_filters[i], shape_filters[j]);
@@ -394,7 +399,7 @@ impl CompiledScene {
     /// Whether body `b` (a link, or `num_links + o` for a free object) never moves: the root
     /// link of an articulation, welded to the env frame.
     pub fn is_fixed_body(&self, b: usize) -> bool {
-        b < self.links.len() && self.links[b].parent.is_none()
+        is_root_link(&self.links, b)
     }
 
     /// A sphere in body `b`'s frame that holds all of its shapes: `(centre, radius)`.
@@ -425,7 +430,7 @@ impl CompiledScene {
 
     /// The geometry table the narrow phase loops over (see [`GeometryTable`]).
     pub fn geometry_table(&self) -> GeometryTable {
-        let fixed = |s: &ShapeData| s.body.is_none_or(|b| self.is_fixed_body(b));
+        let fixed = |s: &ShapeData| never_moves(&self.links, s);
         let mut data = Vec::new();
         for (i, shape) in self.shapes.iter().enumerate() {
             let (pose, code, pose_body) = if fixed(shape) {

@@ -85,8 +85,8 @@ pub struct WgpuBackend {
     timed: bool,
 }
 
-/// Two GPU timestamps around the step kernel, resolved into a buffer that is read back with
-/// the state.
+/// Two GPU timestamps around the step kernel, resolved into a buffer that each step copies
+/// into `timestamps` for `last_kernel_time` to read.
 struct KernelTimer {
     queries: wgpu::QuerySet,
     resolved: wgpu::Buffer,
@@ -404,25 +404,28 @@ impl WgpuBackend {
         }
     }
 
+    /// Uploads the dirty ranges of `inputs`, overlapping ones merged.
     fn upload_inputs(&mut self) {
-        let mut ranges = std::mem::take(&mut self.dirty);
-        ranges.sort_by_key(|r| r.start);
-        let mut merged: Vec<std::ops::Range<usize>> = Vec::with_capacity(ranges.len());
-        for r in ranges {
-            match merged.last_mut() {
-                Some(last) if r.start <= last.end => last.end = last.end.max(r.end),
-                _ => merged.push(r),
-            }
-        }
-        for r in merged {
+        self.dirty.sort_unstable_by_key(|r| r.start);
+        let mut ranges = self.dirty.drain(..);
+        let Some(mut run) = ranges.next() else {
+            return;
+        };
+        let upload = |r: std::ops::Range<usize>| {
             self.gpu.queue.write_buffer(
                 &self.inputs_buf,
                 (r.start * 4) as u64,
                 bytemuck::cast_slice(&self.inputs[r]),
             );
+        };
+        for r in ranges {
+            if r.start <= run.end {
+                run.end = run.end.max(r.end);
+            } else {
+                upload(std::mem::replace(&mut run, r));
+            }
         }
-        // Reuse the allocation.
-        self.dirty = Vec::with_capacity(4);
+        upload(run);
     }
 
     /// Marks `len` inputs from `start` for the next upload.
@@ -430,7 +433,8 @@ impl WgpuBackend {
         self.dirty.push(start..start + len);
     }
 
-    /// Runs `substeps` substeps (0: only recompute what is published) and reads the state back.
+    /// Runs `substeps` substeps (0: only recompute what is published) and copies the published
+    /// state into the readback buffer; the host mirror reads it when it is next looked at.
     fn dispatch(&mut self, substeps: u32) -> Result<(), PhysicsError> {
         self.upload_inputs();
         // Steps (not republishes) are timed.

@@ -540,7 +540,8 @@ fn boxes_near(apos: vec3<f32>, arot: vec4<f32>, asize: vec3<f32>, bpos: vec3<f32
     return all(abs(ta) <= asize + eb + vec3<f32>(MARGIN)) && all(abs(tb) <= bsize + ea + vec3<f32>(MARGIN));
 }
 
-// The contacts of pair k (shapes a and b, a's kind code not above b's; a is at `pa`).
+// The contacts of pair k (shapes a and b, a's kind code not above b's; a is at `pa` and
+// has passed the test against the group's second side).
 fn collide_pair(k: u32, pa: ShapePose) {
     let pr = geo[GEO_PAIRS + k];
     let a = u32(pr.x);
@@ -554,16 +555,13 @@ fn collide_pair(k: u32, pa: ShapePose) {
     let ia = geo[ea + 3u];
     let ib = geo[eb + 3u];
     // Bounding spheres (or a fixed shape's exact geometry) farther apart than the margin: no
-    // contact can come of this pair.
+    // contact can come of this pair. A fixed b is the group's second side, which `collide`
+    // has already tested a against.
     if ia.z >= 0.0 && ib.z >= 0.0 {
         if distance(pa.pos, pb.pos) > sa.w + sb.w + MARGIN {
             return;
         }
-    } else if ib.z < 0.0 {
-        if !near_fixed(b, pa.pos, sa.w) {
-            return;
-        }
-    } else if !near_fixed(a, pb.pos, sb.w) {
+    } else if ia.z < 0.0 && !near_fixed(a, pb.pos, sb.w) {
         return;
     }
     let ba = i32(geo[ea].w);
@@ -627,13 +625,19 @@ fn collide() {
         let side_b = i32(grp.y);
         let first = u32(grp.z);
         let count = u32(grp.w);
-        let sph_a = side_sphere(side_a);
         let sph_b = side_sphere(side_b);
-        if count > 1u && sph_a.w >= 0.0 && !near_side(sph_a.xyz, sph_a.w, side_b, sph_b) {
-            continue;
-        }
-        if count > 1u && sph_a.w < 0.0 && !near_side(sph_b.xyz, sph_b.w, side_a, sph_a) {
-            continue;
+        if count > 1u {
+            // A moving side's sphere against the other side (a fixed side exactly).
+            let sph_a = side_sphere(side_a);
+            var near_group: bool;
+            if side_a >= 0 {
+                near_group = near_side(sph_a.xyz, sph_a.w, side_b, sph_b);
+            } else {
+                near_group = near_side(sph_b.xyz, sph_b.w, side_a, sph_a);
+            }
+            if !near_group {
+                continue;
+            }
         }
         // Pairs of one group are ordered by their first shape: its pose and its test against
         // the second side serve all of them.

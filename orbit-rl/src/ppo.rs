@@ -350,15 +350,13 @@ impl Ppo {
         // One readback per minibatch (a GPU learner waits for each): the KL, the three
         // losses and the squared gradient norms of the actor (with the noise parameter) and
         // of the critic.
-        let actor_norm = grad_norm_squared(&self.model.actor, &grads)
-            + grad_norm_squared(&self.model.std, &grads);
         let read = values(Tensor::cat(
             vec![
                 l.kl,
                 l.value.detach(),
                 l.surrogate.detach(),
                 l.entropy.detach(),
-                actor_norm,
+                actor_grad_norm_squared(&self.model, &grads),
                 grad_norm_squared(&self.model.critic, &grads),
             ],
             0,
@@ -389,12 +387,13 @@ impl Ppo {
                 (actor_sq + critic_sq).sqrt(),
                 cfg.max_grad_norm,
             ),
-            GradClip::PerNetwork => {
-                let max = cfg.max_grad_norm;
-                clip_grad_norm(&self.model.actor, &mut grads, actor_sq.sqrt(), max);
-                clip_grad_norm(&self.model.std, &mut grads, actor_sq.sqrt(), max);
-                clip_grad_norm(&self.model.critic, &mut grads, critic_sq.sqrt(), max);
-            }
+            GradClip::PerNetwork => clip_per_network(
+                &self.model,
+                &mut grads,
+                actor_sq.sqrt(),
+                critic_sq.sqrt(),
+                cfg.max_grad_norm,
+            ),
         }
         let model = self.model.clone();
         self.model = self.optimizer.step(self.learning_rate, model, grads);
@@ -469,6 +468,25 @@ fn grad_norm_squared<M: Module>(module: &M, grads: &GradientsParams) -> Tensor<1
     let mut norm = SquaredNorm { grads, total: None };
     module.visit(&mut norm);
     norm.total.expect("the module has parameters")
+}
+
+/// The squared norm of the actor's gradients, the noise parameter included.
+fn actor_grad_norm_squared(model: &ActorCritic, grads: &GradientsParams) -> Tensor<1> {
+    grad_norm_squared(&model.actor, grads) + grad_norm_squared(&model.std, grads)
+}
+
+/// Clips the actor (with the noise parameter, gradient norm `actor_norm`) and the critic
+/// (`critic_norm`) each to `max_norm` (RSL-RL 5).
+fn clip_per_network(
+    model: &ActorCritic,
+    grads: &mut GradientsParams,
+    actor_norm: f32,
+    critic_norm: f32,
+    max_norm: f32,
+) {
+    clip_grad_norm(&model.actor, grads, actor_norm, max_norm);
+    clip_grad_norm(&model.std, grads, actor_norm, max_norm);
+    clip_grad_norm(&model.critic, grads, critic_norm, max_norm);
 }
 
 /// Scales the gradients of `module`'s parameters by `max_norm / (norm + 1e-6)` when their
@@ -701,15 +719,11 @@ mod tests {
         let norm = |grads: &GradientsParams, m: &dyn Fn(&GradientsParams) -> Tensor<1>| {
             m(grads).into_scalar::<f32>().sqrt()
         };
-        let actor = |g: &GradientsParams| {
-            grad_norm_squared(&p.model.actor, g) + grad_norm_squared(&p.model.std, g)
-        };
+        let actor = |g: &GradientsParams| actor_grad_norm_squared(&p.model, g);
         let critic = |g: &GradientsParams| grad_norm_squared(&p.model.critic, g);
         let (a, c) = (norm(&grads, &actor), norm(&grads, &critic));
         assert!(a > 1e-2 && c > 1e-2, "norms {a} {c}");
-        clip_grad_norm(&p.model.actor, &mut grads, a, 1e-2);
-        clip_grad_norm(&p.model.std, &mut grads, a, 1e-2);
-        clip_grad_norm(&p.model.critic, &mut grads, c, 1e-2);
+        clip_per_network(&p.model, &mut grads, a, c, 1e-2);
         assert!((norm(&grads, &actor) - 1e-2).abs() < 1e-6);
         assert!((norm(&grads, &critic) - 1e-2).abs() < 1e-6);
     }
