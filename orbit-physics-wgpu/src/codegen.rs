@@ -593,16 +593,16 @@ impl Gen<'_> {
         );
         accessor(
             self,
-            "obj_vdot(o: i32, d: vec3<f32>, ra: vec3<f32>) -> f32",
-            &|o| format!("return dot(d, ovel[{o}]) + dot(ra, oang[{o}]);"),
-            "return 0.0;",
+            "obj_point_vel(o: i32, p: vec3<f32>) -> vec3<f32>",
+            &|o| format!("return ovel[{o}] + cross(oang[{o}], p);"),
+            "return vec3<f32>(0.0);",
         );
         accessor(
             self,
-            "obj_push(o: i32, d: vec3<f32>, ia: vec3<f32>, x: f32)",
+            "obj_push(o: i32, impulse: vec3<f32>, p: vec3<f32>)",
             &|o| {
                 format!(
-                    "ovel[{o}] = ovel[{o}] + d * (x * oinvm[{o}]); oang[{o}] = oang[{o}] + ia * x;"
+                    "ovel[{o}] = ovel[{o}] + impulse * oinvm[{o}]; oang[{o}] = oang[{o}] + oinvi[{o}] * cross(p, impulse);"
                 )
             },
             "",

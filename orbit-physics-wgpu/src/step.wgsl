@@ -86,26 +86,32 @@ var<private> c_ba: array<i32, MAX_C>;
 var<private> c_bb: array<i32, MAX_C>;
 var<private> c_mu: array<f32, MAX_C>;
 var<private> c_slot: array<u32, MAX_C>;
-// Constraint rows. A row's velocity is J v = J_arm q̇ + Σ over its free bodies of
-// d·v_o ± (r × d)·ω_o; its impulse x moves q̇ by W x (W = A⁻¹ J_armᵀ) and each free body by
-// (d x / m, I⁻¹ (r × d) x). `r_info` packs the row kind (bits 0–1: 0 normal, 1 and 2 the
-// tangents, 3 joint limit), whether it has an arm part (bit 2) and the free objects of its two
-// sides plus one (bits 8–15 and 16–23, 0 for none). Normal and limit rows are soft when their
-// bias is ≤ 0 (penetration) and rigid speculative rows otherwise.
-var<private> nr: u32;
-var<private> r_info: array<u32, RMAX>;
+// Constraints: one block per contact (its normal row and two tangent rows along the basis
+// `contact_basis(n)`) and the joint-limit rows. A contact's rows see the relative velocity of
+// its two sides at the contact point: J_arm q̇ (arm part) plus, per free object, the velocity of
+// the object's material point there, v + ω × p (p from the object's centre of mass). An impulse
+// P moves an object by (P / m, I⁻¹ (p × P)) and q̇ by W x per row (W = A⁻¹ J_armᵀ). Only the
+// levers and effective masses are stored, not per-row object Jacobians: the solver is bound by
+// the traffic of this storage (it lives in local memory, and 65 536 envs' worth does not fit in
+// L2), so it recomputes the tangents and the object terms instead. `k_info` holds whether a
+// contact has an arm part (ROW_ARM) and its two sides' free objects plus one (bits 8–15 and
+// 16–23, 0 for none). Normal and limit rows are soft when their bias is ≤ 0 (penetration) and
+// rigid speculative rows otherwise.
+var<private> k_info: array<u32, MAX_C>;
+var<private> k_pa: array<vec3<f32>, MAX_C>;
+var<private> k_pb: array<vec3<f32>, MAX_C>;
+var<private> k_meff: array<vec3<f32>, MAX_C>;
+var<private> k_bias: array<f32, MAX_C>;
+var<private> k_lam: array<vec3<f32>, MAX_C>;
+var<private> nlim: u32;
+var<private> l_meff: array<f32, ND1>;
+var<private> l_bias: array<f32, ND1>;
+var<private> l_lam: array<f32, ND1>;
+var<private> l_slot: array<u32, ND1>;
+// Arm rows: J_arm and W of contact c's direction d at row 3c + d, of limit l at row 3 MAX_C + l
+// (ND1 floats each).
 var<private> r_j: array<f32, RMAX * ND1>;
 var<private> r_w: array<f32, RMAX * ND1>;
-var<private> r_d: array<vec3<f32>, RMAX>;
-var<private> r_ra: array<vec3<f32>, RMAX>;
-var<private> r_rb: array<vec3<f32>, RMAX>;
-var<private> r_ia: array<vec3<f32>, RMAX>;
-var<private> r_ib: array<vec3<f32>, RMAX>;
-var<private> r_meff: array<f32, RMAX>;
-var<private> r_bias: array<f32, RMAX>;
-var<private> r_lam: array<f32, RMAX>;
-var<private> r_mu: array<f32, RMAX>;
-var<private> r_slot: array<u32, RMAX>;
 
 const ROW_ARM: u32 = 4u;
 // Box2D's soft step for a critically damped spring of frequency OMEGA: the bias of a
@@ -658,140 +664,129 @@ fn collide() {
     }
 }
 
-// ---------------------------------------------------------------- constraint rows
+// ---------------------------------------------------------------- constraints
 
-// Builds row `nr` from its arm Jacobian `jt` (if `arm`) and the free-body parts already
-// stored; `k_obj` holds the free bodies' share of J A⁻¹ Jᵀ and `objects` the packed object
-// indices (see `r_info`).
-fn finish_row(kind: u32, objects: u32, d: vec3<f32>, mu: f32, slot: u32, jt: array<f32, ND1>, arm: bool, k_obj: f32) -> u32 {
-    let r = nr;
-    nr += 1u;
-    r_d[r] = d;
-    r_mu[r] = mu;
-    r_slot[r] = slot;
-    r_lam[r] = 0.0;
-    r_bias[r] = 0.0;
-    var k = k_obj;
-    var info = kind | objects;
-    if arm {
-        info |= ROW_ARM;
-        var w = jt;
-        chol_solve(&w);
-        k += arm_store(r * ND1, jt, w);
+// The contact frame of normal n: columns n, t1, t2 (right-handed, orthonormal).
+fn contact_basis(n: vec3<f32>) -> mat3x3<f32> {
+    var t1 = cross(n, vec3<f32>(1.0, 0.0, 0.0));
+    if dot(t1, t1) < 0.01 {
+        t1 = cross(n, vec3<f32>(0.0, 1.0, 0.0));
     }
-    r_info[r] = info;
-    r_meff[r] = 1.0 / max(k, 1e-12);
-    return r;
+    t1 = normalize(t1);
+    return mat3x3<f32>(n, t1, cross(n, t1));
 }
 
-// A free object's part of a row along d at p: the lever r = (p − c) × d, I⁻¹ r and the
-// object's share of J A⁻¹ Jᵀ.
-struct ObjectPart {
-    r: vec3<f32>,
-    i: vec3<f32>,
-    k: f32,
-}
-
-fn object_part(o: i32, p: vec3<f32>, d: vec3<f32>) -> ObjectPart {
-    let r = cross(p - obj_com(o), d);
-    let i = obj_invi(o, r);
-    return ObjectPart(r, i, obj_invm(o) + dot(r, i));
-}
-
-// A contact row along d at p between bodies ba and bb (body code: -1 static, link, NL + object).
-fn contact_row(kind: u32, ba: i32, bb: i32, p: vec3<f32>, d: vec3<f32>, mu: f32, slot: u32) -> u32 {
-    var jt: array<f32, ND1>;
-    let arm_a = body_jt(ba, p, d, 1.0, &jt);
-    let arm_b = body_jt(bb, p, d, -1.0, &jt);
-    let r = nr;
-    var k = 0.0;
-    var objects = 0u;
-    if ba >= i32(NL) {
-        let part = object_part(ba - i32(NL), p, d);
-        r_ra[r] = part.r;
-        r_ia[r] = part.i;
-        k += part.k;
-        objects |= u32(ba - i32(NL) + 1) << 8u;
+// A free object's share of J A⁻¹ Jᵀ for the three rows of a contact at lever p.
+fn object_k(o: i32, p: vec3<f32>, basis: mat3x3<f32>) -> vec3<f32> {
+    var k = vec3<f32>(0.0);
+    for (var d = 0u; d < 3u; d++) {
+        let r = cross(p, basis[d]);
+        k[d] = obj_invm(o) + dot(r, obj_invi(o, r));
     }
-    if bb >= i32(NL) {
-        let part = object_part(bb - i32(NL), p, d);
-        r_rb[r] = part.r;
-        r_ib[r] = part.i;
-        k += part.k;
-        objects |= u32(bb - i32(NL) + 1) << 16u;
-    }
-    return finish_row(kind, objects, d, mu, slot, jt, arm_a || arm_b, k);
+    return k;
 }
 
-// A joint-limit row: `jt` is ±1 at the dof; `s` the distance to the limit.
-fn limit_row(jt: array<f32, ND1>, slot: u32, s: f32) {
-    let r = finish_row(3u, 0u, vec3<f32>(0.0), 0.0, slot, jt, true, 0.0);
-    row_soft(r, s);
+// Stores the arm row `row` (J_arm = jt, W = A⁻¹ jtᵀ); returns J W.
+fn arm_row(row: u32, jt: array<f32, ND1>) -> f32 {
+    var w = jt;
+    chol_solve(&w);
+    return arm_store(row * ND1, jt, w);
 }
 
 // The bias of a normal or limit row with separation s: a penetration (s <= 0) is pushed out
 // softly, a gap (s > 0) may close within this substep.
-fn row_soft(r: u32, s: f32) {
+fn soft_bias(s: f32) -> f32 {
     if s > 0.0 {
-        r_bias[r] = s / DT;
-    } else {
-        r_bias[r] = s * OMEGA / SOFT_A1;
+        return s / DT;
     }
+    return s * OMEGA / SOFT_A1;
+}
+
+// Contact c between bodies ba and bb (body code: -1 static, link, NL + object).
+fn build_contact(c: u32) {
+    let ba = c_ba[c];
+    let bb = c_bb[c];
+    let p = c_p[c];
+    let basis = contact_basis(c_n[c]);
+    var k = vec3<f32>(0.0);
+    var info = 0u;
+    if ba >= i32(NL) {
+        let o = ba - i32(NL);
+        k_pa[c] = p - obj_com(o);
+        k += object_k(o, k_pa[c], basis);
+        info |= u32(o + 1) << 8u;
+    }
+    if bb >= i32(NL) {
+        let o = bb - i32(NL);
+        k_pb[c] = p - obj_com(o);
+        k += object_k(o, k_pb[c], basis);
+        info |= u32(o + 1) << 16u;
+    }
+    for (var d = 0u; d < 3u; d++) {
+        var jt: array<f32, ND1>;
+        let arm_a = body_jt(ba, p, basis[d], 1.0, &jt);
+        let arm_b = body_jt(bb, p, basis[d], -1.0, &jt);
+        if arm_a || arm_b {
+            info |= ROW_ARM;
+            k[d] += arm_row(c * 3u + d, jt);
+        }
+    }
+    k_info[c] = info;
+    k_meff[c] = 1.0 / max(k, vec3<f32>(1e-12));
+    k_bias[c] = soft_bias(c_sep[c]);
+    k_lam[c] = vec3<f32>(0.0);
+}
+
+// A joint-limit row: `jt` is ±1 at the dof; `s` the distance to the limit.
+fn limit_row(jt: array<f32, ND1>, slot: u32, s: f32) {
+    let l = nlim;
+    nlim += 1u;
+    l_meff[l] = 1.0 / max(arm_row(3u * MAX_C + l, jt), 1e-12);
+    l_bias[l] = soft_bias(s);
+    l_lam[l] = 0.0;
+    l_slot[l] = slot;
 }
 
 fn build_rows() {
-    nr = 0u;
     for (var c = 0u; c < nc; c++) {
-        let n = c_n[c];
-        var t1 = cross(n, vec3<f32>(1.0, 0.0, 0.0));
-        if dot(t1, t1) < 0.01 {
-            t1 = cross(n, vec3<f32>(0.0, 1.0, 0.0));
-        }
-        t1 = normalize(t1);
-        let t2 = cross(n, t1);
-        let r = contact_row(0u, c_ba[c], c_bb[c], c_p[c], n, c_mu[c], c_slot[c]);
-        row_soft(r, c_sep[c]);
-        contact_row(1u, c_ba[c], c_bb[c], c_p[c], t1, c_mu[c], c_slot[c]);
-        contact_row(2u, c_ba[c], c_bb[c], c_p[c], t2, c_mu[c], c_slot[c]);
+        build_contact(c);
     }
+    nlim = 0u;
     limit_rows();
 }
 
-fn row_kind(r: u32) -> u32 {
-    return r_info[r] & 3u;
+fn object_a(info: u32) -> i32 {
+    return i32((info >> 8u) & 255u) - 1;
 }
 
-// J v of row r.
-fn row_jv(r: u32) -> f32 {
-    let info = r_info[r];
-    var v = 0.0;
-    if (info & ROW_ARM) != 0u {
-        v = arm_dot(r * ND1);
-    }
-    let oa = i32((info >> 8u) & 255u) - 1;
+fn object_b(info: u32) -> i32 {
+    return i32((info >> 16u) & 255u) - 1;
+}
+
+// The free objects' part of contact c's relative velocity (side a minus side b).
+fn contact_object_vel(c: u32, info: u32) -> vec3<f32> {
+    var v = vec3<f32>(0.0);
+    let oa = object_a(info);
     if oa >= 0 {
-        v += obj_vdot(oa, r_d[r], r_ra[r]);
+        v = obj_point_vel(oa, k_pa[c]);
     }
-    let ob = i32((info >> 16u) & 255u) - 1;
+    let ob = object_b(info);
     if ob >= 0 {
-        v -= obj_vdot(ob, r_d[r], r_rb[r]);
+        v -= obj_point_vel(ob, k_pb[c]);
     }
     return v;
 }
 
-// Applies impulse x of row r to the velocities.
-fn row_apply(r: u32, x: f32) {
-    let info = r_info[r];
-    if (info & ROW_ARM) != 0u {
-        arm_axpy(r * ND1, x);
-    }
-    let oa = i32((info >> 8u) & 255u) - 1;
+// Applies the world impulse `impulse` (side a; −impulse on side b) of contact c to its free
+// objects.
+fn contact_object_push(c: u32, info: u32, impulse: vec3<f32>) {
+    let oa = object_a(info);
     if oa >= 0 {
-        obj_push(oa, r_d[r], r_ia[r], x);
+        obj_push(oa, impulse, k_pa[c]);
     }
-    let ob = i32((info >> 16u) & 255u) - 1;
+    let ob = object_b(info);
     if ob >= 0 {
-        obj_push(ob, -r_d[r], -r_ib[r], x);
+        obj_push(ob, -impulse, k_pb[c]);
     }
 }
 
@@ -801,48 +796,60 @@ fn warm_addr(k: u32, f: u32) -> u32 {
     return (k * 4u + f) * num_envs + env;
 }
 
-// Applies last substep's impulses to rows with the same slot (contacts store their normal and
-// both tangents; limit rows use their normal entry).
+// The warm-start entry with this slot and a non-zero normal impulse, or MAX_C.
+fn warm_find(slot: u32) -> u32 {
+    for (var k = 0u; k < MAX_C; k++) {
+        if bitcast<u32>(warm[warm_addr(k, 0u)]) == slot && warm[warm_addr(k, 1u)] != 0.0 {
+            return k;
+        }
+    }
+    return MAX_C;
+}
+
+// Applies last substep's impulses to the constraints with the same slot (contacts store their
+// normal and both tangents, limit rows their normal entry).
 fn warm_start() {
     let fresh = inp[lay[LAY_IN_FRESH] + env] != 0.0;
     if fresh {
         return;
     }
-    for (var r = 0u; r < nr; r++) {
-        let kind = row_kind(r);
-        if kind == 1u || kind == 2u {
+    for (var c = 0u; c < nc; c++) {
+        let k = warm_find(c_slot[c]);
+        if k == MAX_C {
             continue;
         }
-        for (var k = 0u; k < MAX_C; k++) {
-            if bitcast<u32>(warm[warm_addr(k, 0u)]) != r_slot[r] || warm[warm_addr(k, 1u)] == 0.0 {
-                continue;
+        let lam = vec3<f32>(warm[warm_addr(k, 1u)], warm[warm_addr(k, 2u)], warm[warm_addr(k, 3u)]);
+        let info = k_info[c];
+        k_lam[c] = lam;
+        contact_object_push(c, info, contact_basis(c_n[c]) * lam);
+        if (info & ROW_ARM) != 0u {
+            for (var d = 0u; d < 3u; d++) {
+                arm_axpy((c * 3u + d) * ND1, lam[d]);
             }
-            r_lam[r] = warm[warm_addr(k, 1u)];
-            row_apply(r, r_lam[r]);
-            if kind == 0u {
-                r_lam[r + 1u] = warm[warm_addr(k, 2u)];
-                r_lam[r + 2u] = warm[warm_addr(k, 3u)];
-                row_apply(r + 1u, r_lam[r + 1u]);
-                row_apply(r + 2u, r_lam[r + 2u]);
-            }
-            break;
         }
+    }
+    for (var l = 0u; l < nlim; l++) {
+        let k = warm_find(l_slot[l]);
+        if k == MAX_C {
+            continue;
+        }
+        l_lam[l] = warm[warm_addr(k, 1u)];
+        arm_axpy((3u * MAX_C + l) * ND1, l_lam[l]);
     }
 }
 
 fn store_warm() {
     var k = 0u;
-    for (var r = 0u; r < nr && k < MAX_C; r++) {
-        let kind = row_kind(r);
-        if kind == 1u || kind == 2u {
-            continue;
-        }
-        warm[warm_addr(k, 0u)] = bitcast<f32>(r_slot[r]);
-        warm[warm_addr(k, 1u)] = r_lam[r];
-        if kind == 0u {
-            warm[warm_addr(k, 2u)] = r_lam[r + 1u];
-            warm[warm_addr(k, 3u)] = r_lam[r + 2u];
-        }
+    for (var c = 0u; c < nc; c++) {
+        warm[warm_addr(k, 0u)] = bitcast<f32>(c_slot[c]);
+        warm[warm_addr(k, 1u)] = k_lam[c].x;
+        warm[warm_addr(k, 2u)] = k_lam[c].y;
+        warm[warm_addr(k, 3u)] = k_lam[c].z;
+        k += 1u;
+    }
+    for (var l = 0u; l < nlim && k < MAX_C; l++) {
+        warm[warm_addr(k, 0u)] = bitcast<f32>(l_slot[l]);
+        warm[warm_addr(k, 1u)] = l_lam[l];
         k += 1u;
     }
     for (; k < MAX_C; k++) {
@@ -851,63 +858,90 @@ fn store_warm() {
     }
 }
 
-// `sweeps` of projected Gauss–Seidel over the rows; `soft` uses the rows' soft-constraint bias,
-// otherwise (relaxation after the position update) rows are rigid and unbiased. A row whose
-// impulse does not change applies nothing, and the tangents of a contact without normal
-// impulse (friction limit 0) need no velocity at all: speculative contacts cost little.
+// The new impulse of a normal or limit row with impulse lam, velocity jv, bias b and effective
+// mass meff; `soft` as in `solve`.
+fn normal_impulse(lam: f32, jv: f32, b: f32, meff: f32, soft: bool) -> f32 {
+    var bias = 0.0;
+    var ms = 1.0;
+    var is = 0.0;
+    if soft {
+        bias = b;
+        if b <= 0.0 {
+            ms = SOFT_MS;
+            is = SOFT_IS;
+        }
+    } else if b > 0.0 {
+        // A gap still open after the position update may keep closing.
+        bias = b;
+    }
+    return max(lam - meff * ms * (jv + bias) - is * lam, 0.0);
+}
+
+// One Gauss–Seidel visit of contact c: its normal row, then both tangents together, clamped to
+// the friction disk μ λn.
+fn solve_contact(c: u32, soft: bool) {
+    let info = k_info[c];
+    let arm = (info & ROW_ARM) != 0u;
+    let basis = contact_basis(c_n[c]);
+    let row = c * 3u * ND1;
+    let meff = k_meff[c];
+    let lam = k_lam[c];
+    var jn = dot(contact_object_vel(c, info), basis[0]);
+    if arm {
+        jn += arm_dot(row);
+    }
+    let ln = normal_impulse(lam.x, jn, k_bias[c], meff.x, soft);
+    if ln != lam.x {
+        contact_object_push(c, info, basis[0] * (ln - lam.x));
+        if arm {
+            arm_axpy(row, ln - lam.x);
+        }
+    }
+    let lim = c_mu[c] * ln;
+    var lt = vec2<f32>(0.0);
+    if lim > 0.0 {
+        let v = contact_object_vel(c, info);
+        var jt = vec2<f32>(dot(v, basis[1]), dot(v, basis[2]));
+        if arm {
+            jt += vec2<f32>(arm_dot(row + ND1), arm_dot(row + 2u * ND1));
+        }
+        lt = lam.yz - meff.yz * jt;
+        let mag = length(lt);
+        if mag > lim {
+            lt *= lim / max(mag, 1e-20);
+        }
+    }
+    let dt = lt - lam.yz;
+    let slip = any(dt != vec2<f32>(0.0));
+    if slip {
+        contact_object_push(c, info, basis[1] * dt.x + basis[2] * dt.y);
+        if arm {
+            arm_axpy(row + ND1, dt.x);
+            arm_axpy(row + 2u * ND1, dt.y);
+        }
+    }
+    if slip || ln != lam.x {
+        k_lam[c] = vec3<f32>(ln, lt);
+    }
+}
+
+// `sweeps` of projected Gauss–Seidel over the contacts, then the limit rows; `soft` uses the
+// soft-constraint bias, otherwise (relaxation after the position update) rows are rigid and
+// unbiased. An impulse that does not change applies nothing, and the tangents of a contact
+// without normal impulse (friction limit 0) need no velocity at all: speculative contacts cost
+// little.
 fn solve(soft: bool, sweeps: u32) {
     for (var it = 0u; it < sweeps; it++) {
-        for (var r = 0u; r < nr; r++) {
-            let kind = row_kind(r);
-            if kind == 0u || kind == 3u {
-                let jv = row_jv(r);
-                let b = r_bias[r];
-                var bias = 0.0;
-                var ms = 1.0;
-                var is = 0.0;
-                if soft {
-                    bias = b;
-                    if b <= 0.0 {
-                        ms = SOFT_MS;
-                        is = SOFT_IS;
-                    }
-                } else if b > 0.0 {
-                    // A gap still open after the position update may keep closing.
-                    bias = b;
-                }
-                let lam = r_lam[r];
-                let dl = -r_meff[r] * ms * (jv + bias) - is * lam;
-                let nl = max(lam + dl, 0.0);
-                if nl != lam {
-                    row_apply(r, nl - lam);
-                    r_lam[r] = nl;
-                }
-            } else if kind == 1u {
-                // Both tangents together, clamped to the friction disk μ λn.
-                let lim = r_mu[r] * r_lam[r - 1u];
-                let lam1 = r_lam[r];
-                let lam2 = r_lam[r + 1u];
-                var n1 = 0.0;
-                var n2 = 0.0;
-                if lim > 0.0 {
-                    let l1 = lam1 - r_meff[r] * row_jv(r);
-                    let l2 = lam2 - r_meff[r + 1u] * row_jv(r + 1u);
-                    let mag = length(vec2<f32>(l1, l2));
-                    var sc = 1.0;
-                    if mag > lim {
-                        sc = lim / max(mag, 1e-20);
-                    }
-                    n1 = l1 * sc;
-                    n2 = l2 * sc;
-                }
-                if n1 != lam1 {
-                    row_apply(r, n1 - lam1);
-                    r_lam[r] = n1;
-                }
-                if n2 != lam2 {
-                    row_apply(r + 1u, n2 - lam2);
-                    r_lam[r + 1u] = n2;
-                }
+        for (var c = 0u; c < nc; c++) {
+            solve_contact(c, soft);
+        }
+        for (var l = 0u; l < nlim; l++) {
+            let row = (3u * MAX_C + l) * ND1;
+            let lam = l_lam[l];
+            let nl = normal_impulse(lam, arm_dot(row), l_bias[l], l_meff[l], soft);
+            if nl != lam {
+                arm_axpy(row, nl - lam);
+                l_lam[l] = nl;
             }
         }
     }
