@@ -288,7 +288,7 @@ impl WgpuBackend {
         bytemuck::cast_slice_mut(self.state.get_mut())
     }
 
-    /// Waits for `slice` of a readback buffer to be mapped (after the dispatch that fills it).
+    /// Waits for `slice` of a readback buffer to be mapped (after the submission that fills it).
     /// The views cannot return errors: a GPU lost while reading back is a panic.
     fn map_read(&self, slice: &wgpu::BufferSlice<'_>) {
         slice.map_async(wgpu::MapMode::Read, |_| {});
@@ -301,9 +301,19 @@ impl WgpuBackend {
             .unwrap_or_else(|e| panic!("the GPU did not finish the physics step: {e}"));
     }
 
-    /// Copies the last dispatch's published state into `dst`.
+    /// Copies the last dispatch's published state into `dst`. The copy into the readback
+    /// buffer is queued here, when the state is looked at, not with every step: at 65 536
+    /// envs it is tens of megabytes over the bus, as long as a quarter of the step's kernel.
     fn read_back(&self, dst: &mut [Vec4]) {
         let bytes = (self.buffers.state_len * 4) as u64;
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("orbit readback"),
+            });
+        encoder.copy_buffer_to_buffer(&self.state_buf, 0, &self.staging, 0, bytes);
+        self.gpu.queue.submit([encoder.finish()]);
         let slice = self.staging.slice(..bytes);
         self.map_read(&slice);
         {
@@ -433,8 +443,8 @@ impl WgpuBackend {
         self.dirty.push(start..start + len);
     }
 
-    /// Runs `substeps` substeps (0: only recompute what is published) and copies the published
-    /// state into the readback buffer; the host mirror reads it when it is next looked at.
+    /// Runs `substeps` substeps (0: only recompute what is published); the host mirror reads
+    /// the published state back when it is next looked at.
     fn dispatch(&mut self, substeps: u32) -> Result<(), PhysicsError> {
         self.upload_inputs();
         // Steps (not republishes) are timed.
@@ -464,8 +474,6 @@ impl WgpuBackend {
             pass.set_bind_group(0, &self.bind_group, &[]);
             pass.dispatch_workgroups(self.buffers.num_envs.div_ceil(WORKGROUP) as u32, 1, 1);
         }
-        let bytes = (self.buffers.state_len * 4) as u64;
-        encoder.copy_buffer_to_buffer(&self.state_buf, 0, &self.staging, 0, bytes);
         if let Some(t) = timer {
             encoder.resolve_query_set(&t.queries, 0..2, &t.resolved, 0);
             encoder.copy_buffer_to_buffer(&t.resolved, 0, &self.timestamps, 0, 16);
