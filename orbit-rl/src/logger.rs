@@ -89,6 +89,7 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
                 mean_noise_std: 0.0,
                 fps: 0.0,
                 collection_time: 0.0,
+                env_time: 0.0,
                 learning_time: 0.0,
                 episode: Default::default(),
             });
@@ -103,6 +104,7 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
             "Policy/mean_noise_std" => log.mean_noise_std = v32,
             "Perf/total_fps" => log.fps = value,
             "Perf/collection_time" => log.collection_time = value,
+            "Perf/env_time" => log.env_time = value,
             "Perf/learning_time" => log.learning_time = value,
             "Train/mean_reward" => log.mean_return = Some(v32),
             "Train/mean_episode_length" => log.mean_episode_length = Some(v32),
@@ -130,6 +132,7 @@ pub fn scalars(log: &IterationLog) -> Vec<(String, f64)> {
         ),
         ("Perf/total_fps".into(), log.fps),
         ("Perf/collection_time".into(), log.collection_time),
+        ("Perf/env_time".into(), log.env_time),
         ("Perf/learning_time".into(), log.learning_time),
     ];
     let optional = [

@@ -155,8 +155,20 @@ impl Ppo {
         );
         let device = self.device.clone();
         let model = self.rollout_model();
-        let mu = values(model.action_mean(tensor2(obs.to_vec(), n, no, &device)));
-        let mut value = values(model.value(tensor2(critic_obs.to_vec(), n, nc, &device)));
+        // Means and values come back in one read (each read waits for the device).
+        let out = values(Tensor::cat(
+            vec![
+                model.action_mean(tensor2(obs.to_vec(), n, no, &device)),
+                model.value(tensor2(critic_obs.to_vec(), n, nc, &device)),
+            ],
+            1,
+        ));
+        let mut mu = Vec::with_capacity(n * na);
+        let mut value = Vec::with_capacity(n);
+        for row in out.chunks_exact(na + 1) {
+            mu.extend_from_slice(&row[..na]);
+            value.push(row[na]);
+        }
         if let Some(normalizer) = &self.value_normalizer {
             normalizer.denormalize(&mut value);
         }

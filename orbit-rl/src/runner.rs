@@ -50,6 +50,9 @@ pub struct IterationLog {
     pub fps: f64,
     /// Seconds spent collecting.
     pub collection_time: f64,
+    /// Seconds of the collection spent inside the env's `step` (physics and managers); the
+    /// rest is the policy's forward pass and the runner's bookkeeping.
+    pub env_time: f64,
     /// Seconds spent learning.
     pub learning_time: f64,
     /// Per-key means of the env's episode logs over this iteration.
@@ -229,9 +232,12 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let mut success = (0.0f64, 0usize);
             let mut episode: BTreeMap<String, (f64, usize)> = BTreeMap::new();
             let mut interactions = 0u64;
+            let mut env_time = 0.0;
             for _ in 0..t_steps {
                 self.alg.act(&self.obs, &self.critic_obs, &mut actions)?;
+                let env_start = Instant::now();
                 let step = self.env.step(&actions)?;
+                env_time += env_start.elapsed().as_secs_f64();
                 interactions += n as u64 * u64::from(step.interactions);
                 self.alg
                     .process_env_step(step.rewards, step.dones, step.time_outs);
@@ -288,6 +294,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 mean_noise_std: noise.iter().sum::<f32>() / noise.len() as f32,
                 fps: interactions as f64 / (collection_time + learning_time),
                 collection_time,
+                env_time,
                 learning_time,
                 episode: episode
                     .into_iter()

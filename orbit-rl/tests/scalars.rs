@@ -24,6 +24,7 @@ fn log(iteration: usize, success: Option<f32>) -> IterationLog {
         mean_noise_std: 0.99946,
         fps: 192_753.123_456,
         collection_time: 1.712_345,
+        env_time: 0.25,
         learning_time: 0.412_5,
         episode: BTreeMap::from([
             ("Metrics/target/success".to_string(), 0.25),

@@ -36,6 +36,7 @@ fn timeless(h: &IterationLog) -> IterationLog {
         wall_time: 0.0,
         fps: 0.0,
         collection_time: 0.0,
+        env_time: 0.0,
         learning_time: 0.0,
         ..h.clone()
     }
