@@ -10,7 +10,7 @@ use std::path::Path;
 
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Int, Tensor, TensorData};
 use orbit_core::rng::EnvRng;
 
 use crate::cfg::{GradClip, PpoCfg, Schedule};
@@ -264,13 +264,16 @@ impl Ppo {
         }
         self.updates += 1;
         let mut totals = LossStats::default();
+        let rollout = DeviceRollout::upload(
+            &self.storage,
+            &perm,
+            m,
+            cfg.normalize_advantage_per_mini_batch,
+            &self.device,
+        );
         for _ in 0..cfg.num_learning_epochs {
             for k in 0..cfg.num_mini_batches {
-                let batch = Minibatch::gather(
-                    &self.storage,
-                    &perm[k * m..(k + 1) * m],
-                    cfg.normalize_advantage_per_mini_batch,
-                );
+                let batch = rollout.minibatch(&perm[k * m..(k + 1) * m], &self.device);
                 let stats = self.step_minibatch(batch)?;
                 totals.value += stats.value;
                 totals.surrogate += stats.surrogate;
@@ -291,17 +294,19 @@ impl Ppo {
     fn minibatch_losses(&self, mb: Minibatch) -> MinibatchLosses {
         let cfg = &self.cfg;
         let s = &self.storage;
-        let (rows, na) = (mb.advantages.len(), s.num_actions);
-        let d = &self.device;
-        let obs = tensor2(mb.obs, rows, s.num_obs, d);
-        let critic_obs = tensor2(mb.critic_obs, rows, s.num_critic_obs, d);
-        let actions = tensor2(mb.actions, rows, na, d);
-        let old_mu = tensor2(mb.mu, rows, na, d);
-        let old_sigma = tensor1(s.sigma.clone(), d).reshape([1, na]);
-        let old_log_prob = tensor1(mb.log_prob, d);
-        let advantages = tensor1(mb.advantages, d);
-        let returns = tensor1(mb.returns, d);
-        let old_values = tensor1(mb.values, d);
+        let (rows, na) = (mb.rows, s.num_actions);
+        let Minibatch {
+            obs,
+            critic_obs,
+            actions,
+            mu: old_mu,
+            log_prob: old_log_prob,
+            advantages,
+            returns,
+            values: old_values,
+            ..
+        } = mb;
+        let old_sigma = tensor1(s.sigma.clone(), &self.device).reshape([1, na]);
 
         let mu = self.model.action_mean(obs);
         let sigma = self.model.action_std().reshape([1, na]);
@@ -533,42 +538,84 @@ struct MinibatchLosses {
     entropy: Tensor<1>,
 }
 
-/// The rows of one minibatch, gathered from the storage (moved into tensors afterwards).
-struct Minibatch {
-    obs: Vec<f32>,
-    critic_obs: Vec<f32>,
-    actions: Vec<f32>,
-    mu: Vec<f32>,
-    log_prob: Vec<f32>,
-    advantages: Vec<f32>,
-    returns: Vec<f32>,
-    values: Vec<f32>,
+/// A rollout on the learner's device for one update: uploaded once, then every minibatch of
+/// every epoch is selected from it there (a GPU learner would otherwise gather and upload each
+/// minibatch on the host).
+struct DeviceRollout {
+    obs: Tensor<2>,
+    critic_obs: Tensor<2>,
+    actions: Tensor<2>,
+    mu: Tensor<2>,
+    log_prob: Tensor<1>,
+    advantages: Tensor<1>,
+    returns: Tensor<1>,
+    values: Tensor<1>,
 }
 
-impl Minibatch {
-    fn gather(s: &RolloutStorage, idx: &[usize], normalize: bool) -> Self {
-        let rows = |src: &[f32], dim: usize| -> Vec<f32> {
-            let mut dst = Vec::with_capacity(idx.len() * dim);
-            for &i in idx {
-                dst.extend_from_slice(&src[i * dim..(i + 1) * dim]);
+impl DeviceRollout {
+    /// Uploads the storage. With `per_minibatch` the advantages are normalised within each
+    /// minibatch of `perm` (chunks of `m`): the permutation is the same in every epoch, so
+    /// this is done once, here.
+    fn upload(
+        s: &RolloutStorage,
+        perm: &[usize],
+        m: usize,
+        per_minibatch: bool,
+        device: &Device,
+    ) -> Self {
+        let b = s.batch_size();
+        let mut advantages = s.advantages.clone();
+        if per_minibatch {
+            for chunk in perm.chunks_exact(m) {
+                let mut a: Vec<f32> = chunk.iter().map(|&i| s.advantages[i]).collect();
+                storage::normalize(&mut a);
+                for (&i, v) in chunk.iter().zip(a) {
+                    advantages[i] = v;
+                }
             }
-            dst
-        };
-        let mut mb = Self {
-            obs: rows(&s.obs, s.num_obs),
-            critic_obs: rows(&s.critic_obs, s.num_critic_obs),
-            actions: rows(&s.actions, s.num_actions),
-            mu: rows(&s.mu, s.num_actions),
-            log_prob: rows(&s.actions_log_prob, 1),
-            advantages: rows(&s.advantages, 1),
-            returns: rows(&s.returns, 1),
-            values: rows(&s.values, 1),
-        };
-        if normalize {
-            storage::normalize(&mut mb.advantages);
         }
-        mb
+        Self {
+            obs: tensor2(s.obs.clone(), b, s.num_obs, device),
+            critic_obs: tensor2(s.critic_obs.clone(), b, s.num_critic_obs, device),
+            actions: tensor2(s.actions.clone(), b, s.num_actions, device),
+            mu: tensor2(s.mu.clone(), b, s.num_actions, device),
+            log_prob: tensor1(s.actions_log_prob.clone(), device),
+            advantages: tensor1(advantages, device),
+            returns: tensor1(s.returns.clone(), device),
+            values: tensor1(s.values.clone(), device),
+        }
     }
+
+    /// The rows `idx`, in that order.
+    fn minibatch(&self, idx: &[usize], device: &Device) -> Minibatch {
+        let rows = idx.len();
+        let idx: Vec<i64> = idx.iter().map(|&i| i as i64).collect();
+        let idx = Tensor::<1, Int>::from_data(TensorData::new(idx, [rows]), device);
+        Minibatch {
+            rows,
+            obs: self.obs.clone().select(0, idx.clone()),
+            critic_obs: self.critic_obs.clone().select(0, idx.clone()),
+            actions: self.actions.clone().select(0, idx.clone()),
+            mu: self.mu.clone().select(0, idx.clone()),
+            log_prob: self.log_prob.clone().select(0, idx.clone()),
+            advantages: self.advantages.clone().select(0, idx.clone()),
+            returns: self.returns.clone().select(0, idx.clone()),
+            values: self.values.clone().select(0, idx),
+        }
+    }
+}
+
+/// The rows of one minibatch, on the learner's device.
+struct Minibatch {
+    rows: usize,
+    obs: Tensor<2>,
+    critic_obs: Tensor<2>,
+    actions: Tensor<2>,
+    mu: Tensor<2>,
+    log_prob: Tensor<1>,
+    advantages: Tensor<1>,
+    returns: Tensor<1>,
+    values: Tensor<1>,
 }
 
 #[cfg(test)]
@@ -609,7 +656,8 @@ mod tests {
     /// The whole rollout as one minibatch.
     fn whole_rollout(p: &Ppo) -> Minibatch {
         let all: Vec<usize> = (0..p.storage.batch_size()).collect();
-        Minibatch::gather(&p.storage, &all, false)
+        DeviceRollout::upload(&p.storage, &all, all.len(), false, &p.device)
+            .minibatch(&all, &p.device)
     }
 
     /// Fills the storage with a rollout on synthetic observations and rewards.
@@ -643,6 +691,27 @@ mod tests {
         // Entropy of N(·, 0.7²) in 2 dimensions: 2·(0.5 + 0.5 ln 2π + ln 0.7).
         let expected = 2.0 * (0.5 + 0.5 * (2.0 * PI).ln() + 0.7f32.ln());
         assert!((l.entropy.into_scalar::<f32>() - expected).abs() < 1e-5);
+    }
+
+    /// A minibatch holds the storage's rows in the permutation's order, and with per-minibatch
+    /// normalisation its advantages have mean 0 and (unbiased) standard deviation 1.
+    #[test]
+    fn minibatches_select_their_rows_and_normalise_their_advantages() {
+        let mut p = ppo(16, 4);
+        rollout(&mut p);
+        let perm: Vec<usize> = (0..64).map(|i| (i * 37) % 64).collect();
+        let r = DeviceRollout::upload(&p.storage, &perm, 16, true, &p.device);
+        for chunk in perm.chunks_exact(16) {
+            let mb = r.minibatch(chunk, &p.device);
+            let obs = values(mb.obs);
+            for (row, &i) in chunk.iter().enumerate() {
+                assert_eq!(obs[row * 3..row * 3 + 3], p.storage.obs[i * 3..i * 3 + 3]);
+            }
+            let a = values(mb.advantages);
+            let mean = a.iter().sum::<f32>() / 16.0;
+            let var = a.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / 15.0;
+            assert!(mean.abs() < 1e-6 && (var - 1.0).abs() < 1e-5, "{mean} {var}");
+        }
     }
 
     /// Stored log-probabilities are those of the sampled actions under N(μ, σ²).
