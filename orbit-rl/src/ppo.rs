@@ -710,7 +710,10 @@ mod tests {
             let a = values(mb.advantages);
             let mean = a.iter().sum::<f32>() / 16.0;
             let var = a.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / 15.0;
-            assert!(mean.abs() < 1e-6 && (var - 1.0).abs() < 1e-5, "{mean} {var}");
+            assert!(
+                mean.abs() < 1e-6 && (var - 1.0).abs() < 1e-5,
+                "{mean} {var}"
+            );
         }
     }
 
