@@ -264,7 +264,7 @@ impl Ppo {
         }
         self.updates += 1;
         let mut totals = LossStats::default();
-        let rollout = DeviceRollout::upload(
+        let rollout = Minibatch::upload(
             &self.storage,
             &perm,
             m,
@@ -273,7 +273,7 @@ impl Ppo {
         );
         for _ in 0..cfg.num_learning_epochs {
             for k in 0..cfg.num_mini_batches {
-                let batch = rollout.minibatch(&perm[k * m..(k + 1) * m], &self.device);
+                let batch = rollout.select(&perm[k * m..(k + 1) * m], &self.device);
                 let stats = self.step_minibatch(batch)?;
                 totals.value += stats.value;
                 totals.surrogate += stats.surrogate;
@@ -294,7 +294,7 @@ impl Ppo {
     fn minibatch_losses(&self, mb: Minibatch) -> MinibatchLosses {
         let cfg = &self.cfg;
         let s = &self.storage;
-        let (rows, na) = (mb.rows, s.num_actions);
+        let (rows, na) = (mb.rows(), s.num_actions);
         let Minibatch {
             obs,
             critic_obs,
@@ -304,7 +304,6 @@ impl Ppo {
             advantages,
             returns,
             values: old_values,
-            ..
         } = mb;
         let old_sigma = tensor1(s.sigma.clone(), &self.device).reshape([1, na]);
 
@@ -538,10 +537,10 @@ struct MinibatchLosses {
     entropy: Tensor<1>,
 }
 
-/// A rollout on the learner's device for one update: uploaded once, then every minibatch of
-/// every epoch is selected from it there (a GPU learner would otherwise gather and upload each
-/// minibatch on the host).
-struct DeviceRollout {
+/// Rollout rows on the learner's device: the whole rollout of an update (uploaded once, then
+/// every minibatch of every epoch is selected from it there: a GPU learner would otherwise
+/// gather and upload each minibatch on the host), or one minibatch of it.
+struct Minibatch {
     obs: Tensor<2>,
     critic_obs: Tensor<2>,
     actions: Tensor<2>,
@@ -552,7 +551,7 @@ struct DeviceRollout {
     values: Tensor<1>,
 }
 
-impl DeviceRollout {
+impl Minibatch {
     /// Uploads the storage. With `per_minibatch` the advantages are normalised within each
     /// minibatch of `perm` (chunks of `m`): the permutation is the same in every epoch, so
     /// this is done once, here.
@@ -587,12 +586,11 @@ impl DeviceRollout {
     }
 
     /// The rows `idx`, in that order.
-    fn minibatch(&self, idx: &[usize], device: &Device) -> Minibatch {
+    fn select(&self, idx: &[usize], device: &Device) -> Self {
         let rows = idx.len();
         let idx: Vec<i64> = idx.iter().map(|&i| i as i64).collect();
         let idx = Tensor::<1, Int>::from_data(TensorData::new(idx, [rows]), device);
-        Minibatch {
-            rows,
+        Self {
             obs: self.obs.clone().select(0, idx.clone()),
             critic_obs: self.critic_obs.clone().select(0, idx.clone()),
             actions: self.actions.clone().select(0, idx.clone()),
@@ -603,19 +601,11 @@ impl DeviceRollout {
             values: self.values.clone().select(0, idx),
         }
     }
-}
 
-/// The rows of one minibatch, on the learner's device.
-struct Minibatch {
-    rows: usize,
-    obs: Tensor<2>,
-    critic_obs: Tensor<2>,
-    actions: Tensor<2>,
-    mu: Tensor<2>,
-    log_prob: Tensor<1>,
-    advantages: Tensor<1>,
-    returns: Tensor<1>,
-    values: Tensor<1>,
+    /// Number of rows.
+    fn rows(&self) -> usize {
+        self.advantages.dims()[0]
+    }
 }
 
 #[cfg(test)]
@@ -656,8 +646,7 @@ mod tests {
     /// The whole rollout as one minibatch.
     fn whole_rollout(p: &Ppo) -> Minibatch {
         let all: Vec<usize> = (0..p.storage.batch_size()).collect();
-        DeviceRollout::upload(&p.storage, &all, all.len(), false, &p.device)
-            .minibatch(&all, &p.device)
+        Minibatch::upload(&p.storage, &all, all.len(), false, &p.device).select(&all, &p.device)
     }
 
     /// Fills the storage with a rollout on synthetic observations and rewards.
@@ -700,9 +689,9 @@ mod tests {
         let mut p = ppo(16, 4);
         rollout(&mut p);
         let perm: Vec<usize> = (0..64).map(|i| (i * 37) % 64).collect();
-        let r = DeviceRollout::upload(&p.storage, &perm, 16, true, &p.device);
+        let r = Minibatch::upload(&p.storage, &perm, 16, true, &p.device);
         for chunk in perm.chunks_exact(16) {
-            let mb = r.minibatch(chunk, &p.device);
+            let mb = r.select(chunk, &p.device);
             let obs = values(mb.obs);
             for (row, &i) in chunk.iter().enumerate() {
                 assert_eq!(obs[row * 3..row * 3 + 3], p.storage.obs[i * 3..i * 3 + 3]);
