@@ -2,6 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Columns whose statistics one pass over the rows accumulates (on the stack).
+const COLUMN_BLOCK: usize = 64;
+
 /// Normalises each observation dimension by running statistics: `(x − μ) / (σ + ε)` with
 /// `ε = 0.01`. In training, every batch of rows updates the statistics with the batch mean and
 /// the biased batch variance, until `until` rows have been seen; then they are frozen.
@@ -46,16 +49,38 @@ impl EmpiricalNormalizer {
         }
         self.count += n as u64;
         let rate = n as f64 / self.count as f64;
-        for j in 0..d {
-            let column = x.iter().skip(j).step_by(d).map(|&v| f64::from(v));
-            let batch_mean = column.clone().sum::<f64>() / n as f64;
-            let batch_var = column.map(|v| (v - batch_mean).powi(2)).sum::<f64>() / n as f64;
-            let (mean, var) = (f64::from(self.mean[j]), f64::from(self.var[j]));
-            let delta = batch_mean - mean;
-            let new_mean = mean + rate * delta;
-            let new_var = var + rate * (batch_var - var + delta * (batch_mean - new_mean));
-            self.mean[j] = new_mean as f32;
-            self.var[j] = new_var as f32;
+        // Columns in blocks of COLUMN_BLOCK, each block in two row-order passes (sums, then
+        // squared deviations): the rows are read contiguously, and each column's sums keep
+        // the row order.
+        for first in (0..d).step_by(COLUMN_BLOCK) {
+            let width = COLUMN_BLOCK.min(d - first);
+            let mut sum = [0.0f64; COLUMN_BLOCK];
+            for row in x.chunks_exact(d) {
+                for (s, &v) in sum.iter_mut().zip(&row[first..first + width]) {
+                    *s += f64::from(v);
+                }
+            }
+            let batch_mean = sum.map(|s| s / n as f64);
+            let mut sq = [0.0f64; COLUMN_BLOCK];
+            for row in x.chunks_exact(d) {
+                for ((q, &v), &m) in sq
+                    .iter_mut()
+                    .zip(&row[first..first + width])
+                    .zip(&batch_mean)
+                {
+                    *q += (f64::from(v) - m).powi(2);
+                }
+            }
+            for k in 0..width {
+                let j = first + k;
+                let batch_var = sq[k] / n as f64;
+                let (mean, var) = (f64::from(self.mean[j]), f64::from(self.var[j]));
+                let delta = batch_mean[k] - mean;
+                let new_mean = mean + rate * delta;
+                let new_var = var + rate * (batch_var - var + delta * (batch_mean[k] - new_mean));
+                self.mean[j] = new_mean as f32;
+                self.var[j] = new_var as f32;
+            }
         }
     }
 
