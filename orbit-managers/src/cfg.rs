@@ -6,6 +6,7 @@
 use std::marker::PhantomData;
 
 use orbit_core::physics::SimCfg;
+use orbit_core::scene::ViewerCfg;
 use serde::de::{Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
@@ -210,6 +211,9 @@ pub struct EnvCfg {
     /// Command terms.
     #[serde(default)]
     pub commands: Terms<CommandTermCfg>,
+    /// The camera of rendered frames and videos (`--video`).
+    #[serde(default)]
+    pub viewer: ViewerCfg,
 }
 
 /// A manager-based RL environment config (Isaac Lab `ManagerBasedRLEnvCfg`): the fields of
@@ -251,6 +255,9 @@ pub struct RlEnvCfg {
     /// Curriculum terms (run when envs reset).
     #[serde(default)]
     pub curriculum: Terms<FuncTermCfg>,
+    /// The camera of rendered frames and videos (`--video`).
+    #[serde(default)]
+    pub viewer: ViewerCfg,
 }
 
 impl RlEnvCfg {
@@ -266,6 +273,7 @@ impl RlEnvCfg {
             observations: self.observations.clone(),
             events: self.events.clone(),
             commands: self.commands.clone(),
+            viewer: self.viewer.clone(),
         }
     }
 }

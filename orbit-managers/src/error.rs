@@ -41,4 +41,7 @@ pub enum EnvError {
     /// An action batch of the wrong shape or with non-finite values.
     #[error("invalid action: {0}")]
     InvalidAction(String),
+    /// A step observer (e.g. a video recorder) failed.
+    #[error("step observer: {0}")]
+    Observer(String),
 }

@@ -21,7 +21,7 @@ pub mod term;
 
 pub use base_env::{EnvRngs, EnvView, ManagerBasedEnv, StepTimings};
 pub use error::EnvError;
-pub use rl_env::{Extras, ManagerBasedRlEnv, StepResult};
+pub use rl_env::{Extras, ManagerBasedRlEnv, StepObserver, StepResult};
 pub use scene::Scene;
 pub use task::{
     AgentCfgDef, BlackBoxTaskDef, TaskDef, agent_cfg, black_box_task, black_box_tasks, make,

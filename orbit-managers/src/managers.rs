@@ -629,6 +629,18 @@ impl CommandManager {
         self.terms.iter().map(|c| c.name.as_str())
     }
 
+    /// Appends every term's debug markers for env `env` (e.g. a target pose) to `out`.
+    pub fn debug_markers(
+        &self,
+        scene: &Scene,
+        env: usize,
+        out: &mut Vec<orbit_core::scene::Marker>,
+    ) {
+        for c in &self.terms {
+            c.term.debug_markers(scene, env, out);
+        }
+    }
+
     fn resample(
         range: (f32, f32),
         time_left: &mut [f32],

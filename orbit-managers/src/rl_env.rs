@@ -27,6 +27,14 @@ pub struct Extras {
     pub log: BTreeMap<String, f32>,
 }
 
+/// Called at the end of every [`ManagerBasedRlEnv::step`], with the env as the step left it
+/// (finished envs already reset): e.g. a video recorder, like the `RecordVideo` wrapper Isaac
+/// Lab puts around its envs. A black-box env's inner steps are env steps too, so it sees them.
+pub trait StepObserver: Send {
+    /// Looks at the env after a step.
+    fn after_step(&mut self, env: &ManagerBasedRlEnv) -> Result<(), EnvError>;
+}
+
 /// A manager-based RL environment over a batch of envs.
 pub struct ManagerBasedRlEnv {
     /// The config it was built from.
@@ -40,6 +48,7 @@ pub struct ManagerBasedRlEnv {
     time_outs: Vec<bool>,
     reset_ids: Vec<usize>,
     extras: Extras,
+    observer: Option<Box<dyn StepObserver>>,
 }
 
 /// The result of a step: views into the env's buffers.
@@ -86,6 +95,7 @@ impl ManagerBasedRlEnv {
             time_outs: vec![false; n],
             reset_ids: Vec::with_capacity(n),
             extras: Extras::default(),
+            observer: None,
         };
         env.base.apply_startup_events()?;
         Ok(env)
@@ -167,6 +177,25 @@ impl ManagerBasedRlEnv {
         &self.base.actions
     }
 
+    /// Installs (or, with `None`, removes) the observer called after every step; returns the
+    /// previous one.
+    pub fn set_step_observer(
+        &mut self,
+        observer: Option<Box<dyn StepObserver>>,
+    ) -> Option<Box<dyn StepObserver>> {
+        std::mem::replace(&mut self.observer, observer)
+    }
+
+    /// What rendered frames of env `env` should show besides the scene: every command term's
+    /// debug markers (e.g. the target pose).
+    pub fn debug_markers(&self, env: usize) -> Vec<orbit_core::scene::Marker> {
+        let mut out = Vec::new();
+        self.base
+            .commands
+            .debug_markers(&self.base.scene, env, &mut out);
+        out
+    }
+
     /// Time spent per step phase since construction or the last `timings_mut().clear()`.
     pub fn timings(&self) -> &StepTimings {
         &self.base.timings
@@ -242,6 +271,11 @@ impl ManagerBasedRlEnv {
         }
         lap(&mut self.base.timings.resets, &mut clock);
         self.base.finish_step(&mut clock)?;
+        if let Some(mut observer) = self.observer.take() {
+            let result = observer.after_step(self);
+            self.observer = Some(observer);
+            result?;
+        }
         Ok(StepResult {
             reward: &self.reward,
             terminated: &self.terminated,

@@ -151,6 +151,15 @@ pub trait CommandTerm: Send + Sync {
     fn metrics(&self) -> &[(&'static str, Vec<f32>)] {
         &[]
     }
+    /// Appends what rendered frames should show of env `env`'s command (Isaac Lab's
+    /// `debug_vis`), e.g. a ghost of the object at its target pose.
+    fn debug_markers(
+        &self,
+        _scene: &Scene,
+        _env: usize,
+        _out: &mut Vec<orbit_core::scene::Marker>,
+    ) {
+    }
 }
 
 macro_rules! registry {

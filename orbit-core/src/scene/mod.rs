@@ -3,7 +3,9 @@
 mod cfg;
 mod desc;
 mod model;
+mod viewer;
 
 pub use cfg::*;
 pub use desc::*;
 pub use model::*;
+pub use viewer::*;

@@ -2,6 +2,7 @@
 
 use glam::{EulerRot, Quat, Vec3};
 use orbit_core::math::{Pose, quat_wxyz, rotation_distance, to_wxyz};
+use orbit_core::scene::{Geometry, Marker, MarkerShape};
 use serde::Deserialize;
 
 use crate::base_env::EnvRngs;
@@ -54,6 +55,9 @@ pub struct PoseRanges {
     pub yaw: (f32, f32),
 }
 
+/// Length of each axis of the target-pose marker (m).
+const MARKER_AXIS_LENGTH: f32 = 0.1;
+
 /// A target pose of a body in the articulation's root frame: position uniform in a box, then
 /// `q = R_z(yaw)·R_y(pitch)·R_x(roll)` with uniform angles. Command `(x, y, z, qw, qx, qy, qz)`.
 struct UniformPose {
@@ -96,6 +100,31 @@ impl CommandTerm for UniformPose {
 
     fn metrics(&self) -> &[(&'static str, Vec<f32>)] {
         &self.metrics
+    }
+
+    /// A frame triad at the target: x red, y green, z blue (Isaac Lab's pose marker).
+    fn debug_markers(&self, scene: &Scene, env: usize, out: &mut Vec<Marker>) {
+        let root = scene.backend.articulation(self.robot).link_pose(env, 0);
+        let target = command_pose_in_world(&root, &self.command[env * 7..(env + 1) * 7]);
+        let axis = Geometry::Capsule {
+            radius: 0.006,
+            half_length: 0.5 * MARKER_AXIS_LENGTH,
+        };
+        let half_pi = std::f32::consts::FRAC_PI_2;
+        for (rot, color) in [
+            (Quat::from_rotation_y(half_pi), [0.9, 0.15, 0.15]),
+            (Quat::from_rotation_x(-half_pi), [0.15, 0.8, 0.2]),
+            (Quat::IDENTITY, [0.2, 0.3, 0.95]),
+        ] {
+            // The capsule runs along its local z; move it so that it starts at the origin.
+            let local = Pose::new(rot * Vec3::Z * (0.5 * MARKER_AXIS_LENGTH), rot);
+            out.push(Marker {
+                shape: MarkerShape::Geometry(axis),
+                pose: target.mul_pose(&local),
+                color,
+                opacity: 1.0,
+            });
+        }
     }
 
     fn resample(&mut self, _scene: &Scene, env_ids: &[usize], rng: &mut EnvRngs) {

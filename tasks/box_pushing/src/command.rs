@@ -1,6 +1,7 @@
 //! The target-pose command: Fancy Gym's `sample_context` with its minimum-distance rule.
 
-use orbit_core::math::{quat_wxyz, rotation_distance};
+use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
+use orbit_core::scene::{Marker, MarkerShape};
 use orbit_managers::term::{CommandTerm, CommandTermDef, TermContext};
 use orbit_managers::{EnvError, EnvRngs, Scene};
 use serde::Deserialize;
@@ -51,6 +52,9 @@ pub const SUCCESS_DISTANCE: f32 = 0.05;
 /// Fancy Gym's success threshold on the orientation error (rad).
 pub const SUCCESS_ANGLE: f32 = 0.5;
 
+/// Colour of the target marker (a translucent ghost of the box) in rendered frames.
+const TARGET_COLOR: [f32; 3] = [0.2, 0.85, 0.3];
+
 /// Draws at most this many candidates per resample (Fancy Gym loops without bound; with the
 /// default ranges the acceptance rate is above 0.5, so the cap is never reached in practice).
 const MAX_DRAWS: usize = 1000;
@@ -79,6 +83,19 @@ impl CommandTerm for TargetPose {
 
     fn metrics(&self) -> &[(&'static str, Vec<f32>)] {
         &self.metrics
+    }
+
+    fn debug_markers(&self, _scene: &Scene, env: usize, out: &mut Vec<Marker>) {
+        let c = &self.command[env * 7..(env + 1) * 7];
+        out.push(Marker {
+            shape: MarkerShape::RigidObject(self.object),
+            pose: Pose::new(
+                glam::Vec3::new(c[0], c[1], c[2]),
+                quat_wxyz([c[3], c[4], c[5], c[6]]),
+            ),
+            color: TARGET_COLOR,
+            opacity: 0.45,
+        });
     }
 
     fn resample(&mut self, scene: &Scene, env_ids: &[usize], rng: &mut EnvRngs) {
