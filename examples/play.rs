@@ -3,10 +3,11 @@
 //! ```text
 //! cargo run --release --example play -- --task Reach-Franka-v0            # newest run
 //! cargo run --release --example play -- --checkpoint logs/franka_reach/<run>/model_99
+//! cargo run --release --example play -- --task Reach-Franka-v0 --video   # and a GIF of it
 //! ```
 
 use clap::Parser;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    orbit::train::play(&orbit::train::PlayArgs::parse())
+fn main() -> std::process::ExitCode {
+    orbit::exit_code(orbit::train::play(&orbit::train::PlayArgs::parse()))
 }

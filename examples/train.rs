@@ -8,14 +8,13 @@
 //! ```
 //!
 //! Writes `logs/<experiment>/<timestamp>/`: resolved configs (`params/`), checkpoints
-//! (`model_<it>.*`), `scalars.csv` and `training_curves.png`.
+//! (`model_<it>.*`), `scalars.csv` and `training_curves.png`; with `--video`, GIFs in `videos/train/`.
 
 use clap::Parser;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+fn main() -> std::process::ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
         .init();
-    orbit::train::train(&orbit::train::TrainArgs::parse(), true)?;
-    Ok(())
+    orbit::exit_code(orbit::train::train(&orbit::train::TrainArgs::parse(), true))
 }

@@ -9,6 +9,7 @@ pub use orbit_core as core;
 pub use orbit_managers as managers;
 pub use orbit_physics_rapier as physics_rapier;
 pub use orbit_physics_wgpu as physics_wgpu;
+pub use orbit_render as render;
 pub use orbit_rl as rl;
 pub use orbit_task_box_pushing as task_box_pushing;
 pub use orbit_task_reach as task_reach;
@@ -23,16 +24,31 @@ pub fn make(
     managers::make(task, overrides)
 }
 
+/// A step-based or black-box env behind one type.
+pub type BoxedVecEnv = Box<dyn rl::VecEnv>;
+
 /// Builds a registered task as the learner sees it: a step-based task as an
 /// [`RlVecEnv`](rl::RlVecEnv), a black-box task as a [`BlackBoxEnv`](rl::BlackBoxEnv) (its
 /// registered config with `black_box_overrides`). `env_overrides` apply to the step-based env.
+/// With `video`, a [`VideoRecorder`](render::VideoRecorder) renders the env's viewer camera
+/// (a black-box env's every inner step), and its progress handle is returned too.
 pub fn make_vec_env(
     task: &str,
     env_overrides: &[String],
     black_box_overrides: &[String],
-) -> Result<Box<dyn rl::VecEnv>, rl::RlError> {
-    let env = make(task, env_overrides)?;
-    Ok(match managers::black_box_task(task) {
+    video: Option<render::VideoCfg>,
+) -> Result<(BoxedVecEnv, Option<render::VideoProgress>), Box<dyn std::error::Error>> {
+    let mut env = make(task, env_overrides)?;
+    let progress = match video {
+        Some(cfg) => {
+            let recorder = render::VideoRecorder::new(&env, cfg)?;
+            let progress = recorder.progress();
+            env.set_step_observer(Some(Box::new(recorder)));
+            Some(progress)
+        }
+        None => None,
+    };
+    let vec_env: BoxedVecEnv = match managers::black_box_task(task) {
         Some(bb) => Box::new(rl::BlackBoxEnv::from_ron(
             env,
             bb.config,
@@ -40,7 +56,20 @@ pub fn make_vec_env(
             &bb.overrides_with(black_box_overrides),
         )?),
         None => Box::new(rl::RlVecEnv::new(env)?),
-    })
+    };
+    Ok((vec_env, progress))
+}
+
+/// The exit code of an example's `main`: success, or the error's message (not its debug
+/// form) on standard error and failure.
+pub fn exit_code<T>(result: Result<T, Box<dyn std::error::Error>>) -> std::process::ExitCode {
+    match result {
+        Ok(_) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
 }
 
 /// References the backend and task crates so their `inventory` registrations are linked in.
@@ -65,6 +94,18 @@ pub struct EnvArgs {
     /// Physics backend (`rapier` on the CPU, `wgpu` on the GPU).
     #[arg(long)]
     pub backend: Option<String>,
+}
+
+/// Video flags of `train` and `play` (Isaac Lab's `--video`, `--video_length`).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct VideoArgs {
+    /// Record videos (animated GIFs of the env config's `viewer` camera) into
+    /// `<run>/videos/<train|play>/`.
+    #[arg(long)]
+    pub video: bool,
+    /// Env steps per video.
+    #[arg(long, default_value_t = 200)]
+    pub video_length: usize,
 }
 
 /// Common command-line flags of the examples (Isaac Lab's names), turned into overrides.

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Parser;
 use orbit_core::config::Node;
+use orbit_render::VideoCfg;
 use orbit_rl::burn::tensor::Device;
 use orbit_rl::run_dir::{new_run_dir, resolve_checkpoint};
 use orbit_rl::{OnPolicyRunner, Policy, RlError, RunnerCfg, VecEnv};
@@ -38,6 +39,12 @@ pub struct TrainArgs {
     /// Checkpoint regex within the run (`model_<iteration>`); the highest iteration is taken.
     #[arg(long, default_value = "model_.*")]
     pub checkpoint: String,
+    /// Videos during training.
+    #[command(flatten)]
+    pub video: crate::VideoArgs,
+    /// Env steps between the starts of training videos.
+    #[arg(long, default_value_t = 2000)]
+    pub video_interval: u64,
     /// Experiment name (the directory under the log root).
     #[arg(long)]
     pub experiment_name: Option<String>,
@@ -72,6 +79,9 @@ pub struct PlayArgs {
     /// Root of the run directories.
     #[arg(long, default_value = "logs")]
     pub log_root: PathBuf,
+    /// A video of the first steps, written beside the checkpoint (`videos/play/`).
+    #[command(flatten)]
+    pub video: crate::VideoArgs,
     /// Episodes to play per env.
     #[arg(long, default_value_t = 1)]
     pub episodes: usize,
@@ -218,7 +228,17 @@ pub fn train(
     };
     std::fs::create_dir_all(&dir).map_err(RlError::io(&dir))?;
     write_params(&dir, &args.task, &run)?;
-    let vec_env = crate::make_vec_env(&args.task, &run.env_overrides, &run.black_box_overrides)?;
+    let video = args.video.video.then(|| VideoCfg {
+        dir: dir.join("videos").join("train"),
+        length: args.video.video_length,
+        interval: Some(args.video_interval),
+    });
+    let (vec_env, _) = crate::make_vec_env(
+        &args.task,
+        &run.env_overrides,
+        &run.black_box_overrides,
+        video,
+    )?;
     println!(
         "{}: {} envs × {} steps per iteration, {} iterations; run directory {}",
         args.task,
@@ -272,7 +292,24 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let e = &args.env;
     let env_overrides =
         crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &overrides.env);
-    let mut env = crate::make_vec_env(&args.task, &env_overrides, &overrides.black_box)?;
+    let video = args.video.video.then(|| {
+        let run_dir = base.parent().unwrap_or(Path::new("."));
+        VideoCfg {
+            dir: run_dir.join("videos").join("play"),
+            length: args.video.video_length,
+            interval: None,
+        }
+    });
+    let video_dir = video.as_ref().map(|v| v.dir.clone());
+    let (mut env, video_progress) =
+        crate::make_vec_env(&args.task, &env_overrides, &overrides.black_box, video)?;
+    // Like Isaac Lab's play, keep going until the video is complete.
+    let video_frames = args.video.video_length as u64;
+    let video_due = || {
+        video_progress
+            .as_ref()
+            .is_some_and(|p| p.frames() < video_frames)
+    };
     if env.num_obs() != policy.num_obs() {
         return Err(RlError::EnvMismatch(format!(
             "the policy expects {} observations, the env gives {}",
@@ -285,7 +322,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let n = env.num_envs();
     let mut returns = vec![0.0f32; n];
     let mut finished = vec![0usize; n];
-    while finished.iter().any(|&f| f < args.episodes) {
+    while finished.iter().any(|&f| f < args.episodes) || video_due() {
         let actions = policy.act(env.observations());
         let step = env.step(&actions)?;
         let mut any = false;
@@ -308,6 +345,11 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
                 println!("    {key}: {value:.4}");
             }
         }
+    }
+    // Dropping the env closes the video file.
+    drop(env);
+    if let Some(dir) = video_dir {
+        println!("video: {}", orbit_render::video_path(&dir, 0).display());
     }
     Ok(())
 }

@@ -1,0 +1,177 @@
+//! Animated GIF output: pure Rust, readable by every browser and image viewer, no ffmpeg.
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use crate::{Image, RenderError};
+
+/// NeuQuant sampling factor of the per-frame palette (1 best, 30 fastest; 10 is gif's default).
+const QUANTIZER_SPEED: i32 = 10;
+
+/// Writes frames of one size into an animated GIF that loops.
+pub struct GifWriter {
+    encoder: Option<gif::Encoder<BufWriter<File>>>,
+    path: PathBuf,
+    size: (u16, u16),
+    delay_cs: u16,
+    frames: usize,
+}
+
+impl GifWriter {
+    /// Creates `path` (and its directory) for frames of `width × height` shown `frame_s`
+    /// seconds each (GIF delays are whole hundredths of a second; at least one).
+    pub fn create(path: &Path, width: u32, height: u32, frame_s: f32) -> Result<Self, RenderError> {
+        let io = |source| RenderError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let gif = |source| RenderError::Gif {
+            path: path.to_path_buf(),
+            source,
+        };
+        let size = (
+            u16::try_from(width).map_err(|_| too_large(path))?,
+            u16::try_from(height).map_err(|_| too_large(path))?,
+        );
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(io)?;
+        }
+        let file = BufWriter::new(File::create(path).map_err(io)?);
+        let mut encoder = gif::Encoder::new(file, size.0, size.1, &[]).map_err(gif)?;
+        encoder.set_repeat(gif::Repeat::Infinite).map_err(gif)?;
+        Ok(Self {
+            encoder: Some(encoder),
+            path: path.to_path_buf(),
+            size,
+            delay_cs: (frame_s * 100.0).round().clamp(1.0, f32::from(u16::MAX)) as u16,
+            frames: 0,
+        })
+    }
+
+    /// The file written to.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Frames written so far.
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Appends a frame (its own 256-colour palette); it must have the size given at creation.
+    pub fn push(&mut self, image: &Image) -> Result<(), RenderError> {
+        if (image.width(), image.height()) != (u32::from(self.size.0), u32::from(self.size.1)) {
+            return Err(RenderError::InvalidViewer {
+                field: "resolution".into(),
+                message: format!(
+                    "frame of {}×{} pushed into a {}×{} video",
+                    image.width(),
+                    image.height(),
+                    self.size.0,
+                    self.size.1
+                ),
+            });
+        }
+        let mut frame =
+            gif::Frame::from_rgb_speed(self.size.0, self.size.1, image.rgb(), QUANTIZER_SPEED);
+        frame.delay = self.delay_cs;
+        let encoder = self.encoder.as_mut().expect("open until finished");
+        encoder
+            .write_frame(&frame)
+            .map_err(|source| RenderError::Gif {
+                path: self.path.clone(),
+                source,
+            })?;
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// Writes the trailer and closes the file.
+    pub fn finish(mut self) -> Result<PathBuf, RenderError> {
+        self.close()?;
+        Ok(std::mem::take(&mut self.path))
+    }
+
+    fn close(&mut self) -> Result<(), RenderError> {
+        if let Some(encoder) = self.encoder.take() {
+            let path = self.path.clone();
+            let mut file = encoder
+                .into_inner()
+                .map_err(|source| RenderError::Gif { path, source })?;
+            std::io::Write::flush(&mut file).map_err(|source| RenderError::Io {
+                path: self.path.clone(),
+                source,
+            })?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for GifWriter {
+    fn drop(&mut self) {
+        if let Err(e) = self.close() {
+            tracing::warn!("{e}");
+        }
+    }
+}
+
+fn too_large(path: &Path) -> RenderError {
+    RenderError::InvalidViewer {
+        field: "resolution".into(),
+        message: format!(
+            "{}: GIF frames are at most 65535 pixels each way",
+            path.display()
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_round_trip_with_their_size_delay_and_colours() {
+        let dir = std::env::temp_dir().join(format!("orbit-render-gif-{}", std::process::id()));
+        let path = dir.join("clip.gif");
+        let mut w = GifWriter::create(&path, 8, 6, 0.02).unwrap();
+        for k in 0..3u8 {
+            let mut img = Image::new(8, 6);
+            for (i, px) in img.rgb_mut().chunks_exact_mut(3).enumerate() {
+                // Left half red, right half blue, brighter each frame.
+                let level = 100 + 50 * k;
+                px.copy_from_slice(&if i % 8 < 4 {
+                    [level, 0, 0]
+                } else {
+                    [0, 0, level]
+                });
+            }
+            w.push(&img).unwrap();
+        }
+        assert!(w.push(&Image::new(4, 4)).is_err());
+        assert_eq!(w.frames(), 3);
+        let written = w.finish().unwrap();
+        let mut opts = gif::DecodeOptions::new();
+        opts.set_color_output(gif::ColorOutput::RGBA);
+        let mut dec = opts.read_info(File::open(&written).unwrap()).unwrap();
+        let mut frames = 0;
+        while let Some(f) = dec.read_next_frame().unwrap() {
+            assert_eq!((f.width, f.height, f.delay), (8, 6, 2));
+            let level = 100 + 50 * frames;
+            // NeuQuant palettes are close, not exact: within 8 levels.
+            let left = &f.buffer[0..3];
+            let right = &f.buffer[4 * 7..4 * 7 + 3];
+            assert!(
+                (i32::from(left[0]) - level).abs() <= 8 && left[2] <= 8,
+                "{left:?}"
+            );
+            assert!(
+                (i32::from(right[2]) - level).abs() <= 8 && right[0] <= 8,
+                "{right:?}"
+            );
+            frames += 1;
+        }
+        assert_eq!(frames, 3);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
