@@ -19,4 +19,4 @@ pub use error::RenderError;
 pub use image::Image;
 pub use recorder::{VideoCfg, VideoProgress, VideoRecorder, video_path};
 pub use renderer::Renderer;
-pub use video::GifWriter;
+pub use video::{GifThread, GifWriter};

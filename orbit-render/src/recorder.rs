@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use orbit_managers::{EnvError, ManagerBasedRlEnv, StepObserver};
 
-use crate::{GifWriter, Image, RenderError, Renderer};
+use crate::{GifThread, GifWriter, Image, RenderError, Renderer};
 
 /// When and where videos are recorded.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,7 +29,10 @@ pub struct VideoRecorder {
     frame_s: f32,
     /// Env steps seen so far.
     step: u64,
-    current: Option<GifWriter>,
+    /// The video being recorded.
+    current: Option<GifThread>,
+    /// Videos complete but still being encoded.
+    closing: Vec<GifThread>,
     written: Vec<PathBuf>,
     progress: VideoProgress,
 }
@@ -66,6 +69,7 @@ impl VideoRecorder {
             frame_s: env.step_dt(),
             step: 0,
             current: None,
+            closing: Vec::new(),
             written: Vec::new(),
             progress: VideoProgress::default(),
             cfg,
@@ -77,9 +81,24 @@ impl VideoRecorder {
         self.progress.clone()
     }
 
-    /// The videos finished so far.
+    /// The videos written to the end so far.
     pub fn written(&self) -> &[PathBuf] {
         &self.written
+    }
+
+    /// Collects the videos whose encoders are done (all of them with `wait`).
+    fn collect_closed(&mut self, wait: bool) -> Result<(), RenderError> {
+        let mut k = 0;
+        while k < self.closing.len() {
+            if wait || self.closing[k].is_finished() {
+                let path = self.closing.swap_remove(k).join()?;
+                tracing::info!("wrote {}", path.display());
+                self.written.push(path);
+            } else {
+                k += 1;
+            }
+        }
+        Ok(())
     }
 
     /// Renders the env's current state into the open video, opening one when a video is due.
@@ -88,10 +107,12 @@ impl VideoRecorder {
             Some(every) => self.step.is_multiple_of(every),
             None => self.step == 0,
         };
+        self.collect_closed(false)?;
         if self.current.is_none() && due {
             let path = video_path(&self.cfg.dir, self.step);
             let (w, h) = (self.image.width(), self.image.height());
-            self.current = Some(GifWriter::create(&path, w, h, self.frame_s)?);
+            let writer = GifWriter::create(&path, w, h, self.frame_s)?;
+            self.current = Some(GifThread::spawn(writer));
         }
         self.step += 1;
         let Some(video) = self.current.as_mut() else {
@@ -100,14 +121,27 @@ impl VideoRecorder {
         let markers = env.debug_markers(self.renderer.env());
         self.renderer
             .render(env.scene().backend.as_ref(), &markers, &mut self.image);
-        video.push(&self.image)?;
+        video.push(self.image.clone())?;
         self.progress.0.fetch_add(1, Ordering::Relaxed);
         if video.frames() >= self.cfg.length {
-            let path = self.current.take().expect("open").finish()?;
-            tracing::info!("wrote {}", path.display());
-            self.written.push(path);
+            let mut done = self.current.take().expect("open");
+            done.close();
+            self.closing.push(done);
         }
         Ok(())
+    }
+}
+
+impl Drop for VideoRecorder {
+    /// Ends an unfinished video and waits for every encoder, so that the files are complete.
+    fn drop(&mut self) {
+        if let Some(mut video) = self.current.take() {
+            video.close();
+            self.closing.push(video);
+        }
+        if let Err(e) = self.collect_closed(true) {
+            tracing::warn!("{e}");
+        }
     }
 }
 

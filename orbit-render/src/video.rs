@@ -3,6 +3,8 @@
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
+use std::sync::mpsc::{SyncSender, sync_channel};
+use std::thread::JoinHandle;
 
 use crate::{Image, RenderError};
 
@@ -111,6 +113,81 @@ impl GifWriter {
 impl Drop for GifWriter {
     fn drop(&mut self) {
         if let Err(e) = self.close() {
+            tracing::warn!("{e}");
+        }
+    }
+}
+
+/// Frames a [`GifThread`] holds before `push` waits for the encoder (about 15 MB at 320×240).
+const QUEUE_FRAMES: usize = 64;
+
+/// A [`GifWriter`] on a thread of its own: the palette quantisation (most of a frame's cost)
+/// and the writing overlap the simulation; `push` only waits when the queue is full.
+pub struct GifThread {
+    sender: Option<SyncSender<Image>>,
+    handle: Option<JoinHandle<Result<PathBuf, RenderError>>>,
+    frames: usize,
+}
+
+impl GifThread {
+    /// Moves `writer` to a new thread.
+    pub fn spawn(mut writer: GifWriter) -> Self {
+        let (sender, frames) = sync_channel::<Image>(QUEUE_FRAMES);
+        let handle = std::thread::spawn(move || {
+            for image in frames {
+                writer.push(&image)?;
+            }
+            writer.finish()
+        });
+        Self {
+            sender: Some(sender),
+            handle: Some(handle),
+            frames: 0,
+        }
+    }
+
+    /// Frames queued so far.
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Queues a frame; a failure of the encoder (e.g. a full disk) is returned here.
+    pub fn push(&mut self, image: Image) -> Result<(), RenderError> {
+        let sender = self.sender.as_ref().expect("open until closed");
+        if sender.send(image).is_err() {
+            // The encoder stopped early: its result says why.
+            self.sender = None;
+            return self.join().map(|_| ());
+        }
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// Ends the video: no more frames; [`join`](Self::join) waits for the file.
+    pub fn close(&mut self) {
+        self.sender = None;
+    }
+
+    /// Whether the encoder has written the whole file (after [`close`](Self::close)).
+    pub fn is_finished(&self) -> bool {
+        self.handle.as_ref().is_none_or(|h| h.is_finished())
+    }
+
+    /// Closes the video and waits for the encoder: the path written, or what went wrong.
+    pub fn join(&mut self) -> Result<PathBuf, RenderError> {
+        self.close();
+        let handle = self.handle.take().expect("joined once");
+        handle
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    }
+}
+
+impl Drop for GifThread {
+    fn drop(&mut self) {
+        if self.handle.is_some()
+            && let Err(e) = self.join()
+        {
             tracing::warn!("{e}");
         }
     }
