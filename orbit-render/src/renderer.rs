@@ -217,14 +217,20 @@ impl Renderer {
         Image::new(self.camera.width(), self.camera.height())
     }
 
-    /// Renders the env's current state with `markers` into `image` (of the camera's size).
+    /// Renders the env's current state with `markers` into `image` (of the camera's size):
+    /// [`place`](Self::place), then [`draw`](Self::draw).
     pub fn render(&mut self, backend: &dyn PhysicsBackend, markers: &[Marker], image: &mut Image) {
+        self.place(backend, markers);
+        self.draw(image);
+    }
+
+    /// Ray casts the shapes last placed into `image` (of the camera's size), rows in parallel.
+    pub fn draw(&self, image: &mut Image) {
         assert_eq!(
             (image.width(), image.height()),
             (self.camera.width(), self.camera.height()),
             "the image must have the camera's size"
         );
-        self.place(backend, markers);
         let (camera, opaque, translucent) = (&self.camera, &self.opaque, &self.translucent);
         let row_len = 3 * camera.width() as usize;
         image
@@ -241,8 +247,8 @@ impl Renderer {
             });
     }
 
-    /// Places every shape and marker in the env frame for this frame.
-    fn place(&mut self, backend: &dyn PhysicsBackend, markers: &[Marker]) {
+    /// Places every shape of the env's current state and every marker in the env frame.
+    pub fn place(&mut self, backend: &dyn PhysicsBackend, markers: &[Marker]) {
         let (e, camera) = (self.env, &self.camera);
         self.opaque.clear();
         self.translucent.clear();

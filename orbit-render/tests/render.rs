@@ -218,3 +218,23 @@ fn videos_start_every_interval_with_one_frame_per_step() {
     assert_eq!(count, 3);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Pixels are independent, so a frame is the same on one thread as on several.
+#[test]
+fn frames_do_not_depend_on_the_thread_count() {
+    let env = box_pushing(1);
+    let mut renderer = Renderer::new(&env.scene().desc, &env.cfg.viewer, 1).unwrap();
+    let markers = env.debug_markers(0);
+    renderer.place(env.scene().backend.as_ref(), &markers);
+    let mut frames = Vec::new();
+    for threads in [1, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut image = renderer.new_image();
+        pool.install(|| renderer.draw(&mut image));
+        frames.push(image);
+    }
+    assert!(frames[0] == frames[1], "the frames differ");
+}
