@@ -13,6 +13,9 @@ pub enum RenderError {
         /// What was expected.
         message: String,
     },
+    /// A video setting or frame is out of range (not a `viewer` field: the recording's own).
+    #[error("video: {0}")]
+    InvalidVideo(String),
     /// A file could not be written.
     #[error("{}: {source}", path.display())]
     Io {

@@ -33,7 +33,6 @@ pub struct VideoRecorder {
     current: Option<GifThread>,
     /// Videos complete but still being encoded.
     closing: Vec<GifThread>,
-    written: Vec<PathBuf>,
     progress: VideoProgress,
 }
 
@@ -53,13 +52,10 @@ impl VideoRecorder {
     /// A recorder of `env`'s viewer camera (its config's `viewer`).
     pub fn new(env: &ManagerBasedRlEnv, cfg: VideoCfg) -> Result<Self, RenderError> {
         if cfg.length == 0 || cfg.interval == Some(0) {
-            return Err(RenderError::InvalidViewer {
-                field: "video".into(),
-                message: format!(
-                    "expected a positive video length and interval, got {} and {:?}",
-                    cfg.length, cfg.interval
-                ),
-            });
+            return Err(RenderError::InvalidVideo(format!(
+                "expected a positive video length and interval, got {} and {:?}",
+                cfg.length, cfg.interval
+            )));
         }
         let scene = env.scene();
         let renderer = Renderer::new(&scene.desc, &env.cfg.viewer, env.num_envs())?;
@@ -70,7 +66,6 @@ impl VideoRecorder {
             step: 0,
             current: None,
             closing: Vec::new(),
-            written: Vec::new(),
             progress: VideoProgress::default(),
             cfg,
         })
@@ -81,11 +76,6 @@ impl VideoRecorder {
         self.progress.clone()
     }
 
-    /// The videos written to the end so far.
-    pub fn written(&self) -> &[PathBuf] {
-        &self.written
-    }
-
     /// Collects the videos whose encoders are done (all of them with `wait`).
     fn collect_closed(&mut self, wait: bool) -> Result<(), RenderError> {
         let mut k = 0;
@@ -93,7 +83,6 @@ impl VideoRecorder {
             if wait || self.closing[k].is_finished() {
                 let path = self.closing.swap_remove(k).join()?;
                 tracing::info!("wrote {}", path.display());
-                self.written.push(path);
             } else {
                 k += 1;
             }

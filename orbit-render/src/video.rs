@@ -64,16 +64,13 @@ impl GifWriter {
     /// Appends a frame (its own 256-colour palette); it must have the size given at creation.
     pub fn push(&mut self, image: &Image) -> Result<(), RenderError> {
         if (image.width(), image.height()) != (u32::from(self.size.0), u32::from(self.size.1)) {
-            return Err(RenderError::InvalidViewer {
-                field: "resolution".into(),
-                message: format!(
-                    "frame of {}×{} pushed into a {}×{} video",
-                    image.width(),
-                    image.height(),
-                    self.size.0,
-                    self.size.1
-                ),
-            });
+            return Err(RenderError::InvalidVideo(format!(
+                "frame of {}×{} pushed into a {}×{} video",
+                image.width(),
+                image.height(),
+                self.size.0,
+                self.size.1
+            )));
         }
         let mut frame =
             gif::Frame::from_rgb_speed(self.size.0, self.size.1, image.rgb(), QUANTIZER_SPEED);

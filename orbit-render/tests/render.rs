@@ -195,6 +195,15 @@ fn videos_start_every_interval_with_one_frame_per_step() {
         length: 2,
         interval: Some(3),
     };
+    let empty = VideoCfg {
+        length: 0,
+        ..cfg.clone()
+    };
+    let err = VideoRecorder::new(&env, empty).err().unwrap().to_string();
+    assert!(
+        err.starts_with("video: expected a positive video length"),
+        "{err}"
+    );
     env.set_step_observer(Some(Box::new(VideoRecorder::new(&env, cfg).unwrap())));
     let zero = vec![0.0; env.action_dim()];
     for _ in 0..8 {

@@ -69,13 +69,17 @@ struct UniformPose {
     metrics: [(&'static str, Vec<f32>); 2],
 }
 
-/// The command of env `e` as a world (env-frame) pose, given the articulation's root pose.
-pub fn command_pose_in_world(root: &Pose, command: &[f32]) -> Pose {
-    let local = Pose::new(
+/// A pose command `(x, y, z, qw, qx, qy, qz)` (one env's row) as a pose in its own frame.
+pub fn command_pose(command: &[f32]) -> Pose {
+    Pose::new(
         Vec3::new(command[0], command[1], command[2]),
         quat_wxyz([command[3], command[4], command[5], command[6]]),
-    );
-    root.mul_pose(&local)
+    )
+}
+
+/// The command of env `e` as a world (env-frame) pose, given the articulation's root pose.
+pub fn command_pose_in_world(root: &Pose, command: &[f32]) -> Pose {
+    root.mul_pose(&command_pose(command))
 }
 
 impl CommandTerm for UniformPose {

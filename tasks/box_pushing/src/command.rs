@@ -1,7 +1,8 @@
 //! The target-pose command: Fancy Gym's `sample_context` with its minimum-distance rule.
 
-use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
+use orbit_core::math::{quat_wxyz, rotation_distance};
 use orbit_core::scene::{Marker, MarkerShape};
+use orbit_managers::mdp::command_pose;
 use orbit_managers::term::{CommandTerm, CommandTermDef, TermContext};
 use orbit_managers::{EnvError, EnvRngs, Scene};
 use serde::Deserialize;
@@ -86,13 +87,9 @@ impl CommandTerm for TargetPose {
     }
 
     fn debug_markers(&self, _scene: &Scene, env: usize, out: &mut Vec<Marker>) {
-        let c = &self.command[env * 7..(env + 1) * 7];
         out.push(Marker {
             shape: MarkerShape::RigidObject(self.object),
-            pose: Pose::new(
-                glam::Vec3::new(c[0], c[1], c[2]),
-                quat_wxyz([c[3], c[4], c[5], c[6]]),
-            ),
+            pose: command_pose(&self.command[env * 7..(env + 1) * 7]),
             color: TARGET_COLOR,
             opacity: 0.45,
         });

@@ -2,7 +2,8 @@
 //! the config weights: distances and angles are positive, penalties come from negative weights.
 
 use glam::{Quat, Vec3};
-use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
+use orbit_core::math::{Pose, rotation_distance};
+use orbit_managers::mdp::command_pose;
 use orbit_managers::term::{RewardTerm, RewardTermDef, TermContext};
 use orbit_managers::{EnvError, EnvView};
 use rayon::prelude::*;
@@ -121,11 +122,8 @@ impl Refs {
 
     fn target(&self, env: &EnvView<'_>, e: usize) -> (Vec3, Quat) {
         let (cmd, _) = env.commands.command(&self.command).expect("command exists");
-        let c = &cmd[e * 7..(e + 1) * 7];
-        (
-            Vec3::new(c[0], c[1], c[2]),
-            quat_wxyz([c[3], c[4], c[5], c[6]]),
-        )
+        let target = command_pose(&cmd[e * 7..(e + 1) * 7]);
+        (target.pos, target.rot)
     }
 }
 
