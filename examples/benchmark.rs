@@ -40,8 +40,8 @@ struct Args {
     /// Physics substeps per env step.
     #[arg(long, default_value_t = 10)]
     decimation: usize,
-    /// Velocity-solver iterations per physics step.
-    #[arg(long, default_value_t = SimCfg::default().solver_iterations)]
+    /// Velocity-solver iterations per physics step (0: the backend's default).
+    #[arg(long, default_value_t = 0)]
     solver_iterations: usize,
     /// Task used for the full-env column.
     #[arg(long, default_value = "BoxPushing-Torque-Franka-v0")]

@@ -14,6 +14,7 @@ use orbit_core::scene::{
 };
 use rapier3d::prelude::*;
 
+use crate::DEFAULT_SOLVER_ITERATIONS;
 use crate::hooks::{FrictionPriority, encode_material};
 
 /// Most degrees of freedom of one articulation (size of the stack buffer used for state writes).
@@ -310,7 +311,8 @@ impl EnvWorld {
         let mut world = PhysicsWorld::new();
         world.gravity = sim.gravity;
         world.integration_parameters.dt = sim.dt;
-        world.integration_parameters.num_solver_iterations = sim.solver_iterations;
+        world.integration_parameters.num_solver_iterations =
+            sim.iterations_or(DEFAULT_SOLVER_ITERATIONS);
         for s in &scene.static_objects {
             add_body(&mut world, &s.body, &s.pose, false);
         }

@@ -27,6 +27,8 @@ use env_world::{ArticulationInputs, EnvWorld};
 
 /// Name under which this backend is registered.
 pub const BACKEND_NAME: &str = "rapier";
+/// Velocity-solver iterations when `sim.solver_iterations` is 0 (the default).
+pub const DEFAULT_SOLVER_ITERATIONS: usize = 4;
 
 inventory::submit! {
     BackendRegistration {

@@ -19,7 +19,10 @@ fn box_rests_on_table() {
 
 #[test]
 fn sliding_box_decelerates_at_mu_g() {
-    orbit_conformance::sliding_box_decelerates_at_mu_g(BACKEND_NAME);
+    orbit_conformance::sliding_box_decelerates_at_mu_g(
+        BACKEND_NAME,
+        orbit_conformance::LowSpeedFriction::Coulomb,
+    );
 }
 
 #[test]

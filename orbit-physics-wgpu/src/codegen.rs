@@ -17,8 +17,12 @@ use glam::{Mat3, Quat, Vec3};
 use orbit_core::physics::SimCfg;
 use orbit_core::scene::JointKind;
 
-use crate::compile::{CONTACT_MARGIN, CONTACT_OMEGA, CONTACT_ZETA, CompiledScene, MAX_CONTACTS};
+use crate::compile::{
+    CONTACT_IMPRATIO, CONTACT_MARGIN, CONTACT_SOLIMP, CONTACT_SOLREF, CompiledScene,
+    DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS, SOLVER_RELAXATION,
+};
 use crate::layout;
+use crate::weights::InverseWeights;
 
 /// The full WGSL source of the step kernel for `scene`, with `workgroup` invocations per
 /// workgroup.
@@ -122,10 +126,37 @@ impl Gen<'_> {
         c(self, "WORKGROUP", format!("{workgroup}u"));
         c(self, "DT", f(sim.dt));
         c(self, "GRAVITY", v3(sim.gravity));
-        c(self, "ITERATIONS", format!("{}u", sim.solver_iterations));
+        c(
+            self,
+            "ITERATIONS",
+            format!("{}u", sim.iterations_or(DEFAULT_SOLVER_ITERATIONS)),
+        );
         c(self, "MARGIN", f(CONTACT_MARGIN));
-        c(self, "OMEGA", f(CONTACT_OMEGA));
-        c(self, "ZETA", f(CONTACT_ZETA));
+        c(self, "TIMECONST", f(CONTACT_SOLREF[0]));
+        c(self, "DAMPRATIO", f(CONTACT_SOLREF[1]));
+        c(self, "IMP0", f(CONTACT_SOLIMP[0]));
+        c(self, "IMP1", f(CONTACT_SOLIMP[1]));
+        c(self, "IMP_WIDTH", f(CONTACT_SOLIMP[2]));
+        c(self, "IMP_MID", f(CONTACT_SOLIMP[3]));
+        c(self, "IMPRATIO", f(CONTACT_IMPRATIO));
+        c(self, "RELAXATION", f(SOLVER_RELAXATION));
+        let weights = InverseWeights::new(s);
+        let list = |v: &[f32]| {
+            if v.is_empty() {
+                "0.0".to_string()
+            } else {
+                v.iter().map(|x| f(*x)).collect::<Vec<_>>().join(", ")
+            }
+        };
+        self.line("// Inverse weights at the reference configuration (weights.rs).");
+        self.line(format!(
+            "var<private> body_invw: array<f32, NB1> = array<f32, NB1>({});",
+            list(&weights.body)
+        ));
+        self.line(format!(
+            "var<private> dof_invw: array<f32, ND1> = array<f32, ND1>({});",
+            list(&weights.dof)
+        ));
         self.out.push_str(&layout::lay_constants(s));
         self.line("");
     }

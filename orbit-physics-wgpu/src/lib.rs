@@ -1,7 +1,7 @@
 //! orbit-physics-wgpu: the GPU physics backend. Every env is one invocation of a WGSL compute
 //! kernel that runs reduced-coordinate articulation dynamics (RNEA, CRBA, Cholesky), free rigid
-//! bodies, primitive contacts and a projected Gauss–Seidel solver with soft constraints and warm
-//! starting (see `docs/physics.md`). All envs share one topology: `codegen.rs` writes the
+//! bodies, primitive contacts as MuJoCo's soft constraints and an over-relaxed projected
+//! Gauss–Seidel solver with warm starting (see `docs/physics.md`). All envs share one topology: `codegen.rs` writes the
 //! scene-specific half of the kernel as straight-line code, `step.wgsl` is the rest. State stays
 //! on the GPU between steps and is read back, in exactly the layout the batched views expose,
 //! when it is first looked at after a step (`mirror.rs`).
@@ -14,6 +14,7 @@ mod compile;
 mod gpu;
 mod layout;
 mod mirror;
+mod weights;
 
 use std::sync::Arc;
 
@@ -26,7 +27,14 @@ use orbit_core::physics::{
 use orbit_core::scene::{RootState, SceneDesc};
 use rayon::prelude::*;
 
-pub use compile::{MAX_CONTACTS, MAX_DOFS, MAX_LINKS};
+pub use compile::{
+    CONTACT_IMPRATIO, CONTACT_SOLIMP, CONTACT_SOLREF, DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS,
+    MAX_DOFS, MAX_LINKS,
+};
+
+/// Below the slip speed μ g / rate a contact's friction acts as a damper of this rate (1/s):
+/// MuJoCo's reference acceleration −B v of a friction row, B = 2 / (d_width · timeconst).
+pub const FRICTION_DAMPING_RATE: f32 = 2.0 / (CONTACT_SOLIMP[1] * CONTACT_SOLREF[0]);
 pub use gpu::{Gpu, gpu};
 
 use compile::CompiledScene;

@@ -13,8 +13,8 @@
 // Per substep: forward kinematics → RNEA bias forces → CRBA mass matrix + armature → implicit
 // drives and joint damping folded into A = M + h(D + d) + h²K → Cholesky → free velocities →
 // free bodies (gravity, explicit gyroscopic term) → contacts (narrow phase per shape pair) and
-// joint limits as soft constraint rows → projected Gauss–Seidel with warm start → velocity
-// limits → semi-implicit Euler (quaternions renormalised).
+// joint limits as MuJoCo's soft constraint rows → over-relaxed projected Gauss–Seidel with warm
+// start → velocity limits → semi-implicit Euler (quaternions renormalised).
 //
 // Spatial vectors are (angular, linear) pairs in env-frame coordinates taken at the env origin;
 // a link's spatial inertia there is (mass m, first moment h = m c, rotational inertia J).
@@ -95,17 +95,20 @@ var<private> c_slot: array<u32, MAX_C>;
 // the traffic of this storage (it lives in local memory, and 65 536 envs' worth does not fit in
 // L2), so it recomputes the tangents and the object terms instead. `k_info` holds whether a
 // contact has an arm part (ROW_ARM) and its two sides' free objects plus one (bits 8–15 and
-// 16–23, 0 for none). Normal and limit rows are soft when their bias is ≤ 0 (penetration) and
-// rigid speculative rows otherwise.
+// 16–23, 0 for none). A penetrating contact or limit is MuJoCo's soft constraint (its rows'
+// target velocities `k_tgt` and the normal row's regulariser `k_r`; see `normal_row`), a gap a
+// rigid speculative row.
 var<private> k_info: array<u32, MAX_C>;
 var<private> k_pa: array<vec3<f32>, MAX_C>;
 var<private> k_pb: array<vec3<f32>, MAX_C>;
 var<private> k_meff: array<vec3<f32>, MAX_C>;
-var<private> k_bias: array<f32, MAX_C>;
+var<private> k_tgt: array<vec3<f32>, MAX_C>;
+var<private> k_r: array<f32, MAX_C>;
 var<private> k_lam: array<vec3<f32>, MAX_C>;
 var<private> nlim: u32;
 var<private> l_meff: array<f32, ND1>;
-var<private> l_bias: array<f32, ND1>;
+var<private> l_tgt: array<f32, ND1>;
+var<private> l_r: array<f32, ND1>;
 var<private> l_lam: array<f32, ND1>;
 var<private> l_slot: array<u32, ND1>;
 // Arm rows: J_arm and W of contact c's direction d at row 3c + d, of limit l at row 3 MAX_C + l
@@ -114,12 +117,14 @@ var<private> r_j: array<f32, RMAX * ND1>;
 var<private> r_w: array<f32, RMAX * ND1>;
 
 const ROW_ARM: u32 = 4u;
-// Box2D's soft step for a critically damped spring of frequency OMEGA: the bias of a
-// penetration s is s·OMEGA/SOFT_A1, the impulse is scaled by SOFT_MS and relaxed by SOFT_IS.
-const SOFT_A1: f32 = 2.0 * ZETA + DT * OMEGA;
-const SOFT_A2: f32 = DT * OMEGA * SOFT_A1;
-const SOFT_IS: f32 = 1.0 / (1.0 + SOFT_A2);
-const SOFT_MS: f32 = SOFT_A2 * SOFT_IS;
+// MuJoCo's reference acceleration aref = -B v - K imp(pos) pos of a row with velocity v and
+// distance pos, from solref (timeconst, dampratio) and the impedance's upper end IMP1.
+const REF_K: f32 = 1.0 / (IMP1 * IMP1 * TIMECONST * TIMECONST * DAMPRATIO * DAMPRATIO);
+const REF_B: f32 = 2.0 / (IMP1 * TIMECONST);
+// Velocities at the start of the substep (MuJoCo's reference acceleration uses them).
+var<private> qd0: array<f32, ND1>;
+var<private> ovel0: array<vec3<f32>, NO1>;
+var<private> oang0: array<vec3<f32>, NO1>;
 
 // ---------------------------------------------------------------- quaternions (x, y, z, w)
 
@@ -693,13 +698,47 @@ fn arm_row(row: u32, jt: array<f32, ND1>) -> f32 {
     return arm_store(row * ND1, jt, w);
 }
 
-// The bias of a normal or limit row with separation s: a penetration (s <= 0) is pushed out
-// softly, a gap (s > 0) may close within this substep.
-fn soft_bias(s: f32) -> f32 {
-    if s > 0.0 {
-        return s / DT;
+// MuJoCo's impedance d(pos) of a penetration pos < 0 (solimp: IMP0 at contact, IMP1 from
+// IMP_WIDTH deep, a power-2 sigmoid with midpoint IMP_MID between).
+fn impedance(pos: f32) -> f32 {
+    let x = clamp(-pos / IMP_WIDTH, 0.0, 1.0);
+    var y: f32;
+    if x <= IMP_MID {
+        y = x * x / IMP_MID;
+    } else {
+        y = 1.0 - (1.0 - x) * (1.0 - x) / (1.0 - IMP_MID);
     }
-    return s * OMEGA / SOFT_A1;
+    return IMP0 + y * (IMP1 - IMP0);
+}
+
+// A normal or limit row with distance s, start-of-substep velocity v0, J A⁻¹ Jᵀ = a and
+// inverse weight a0 at the reference configuration (weights.rs): its target velocity,
+// regulariser R and 1 / (a + R). A penetration (s < 0) is MuJoCo's soft constraint: the
+// impulse λ ≥ 0 minimises ½ λ(a + R)λ + λ(v_free − v0 − h aref), i.e. the row's velocity goes
+// to v0 + h aref − R λ, with aref = −B v0 − K d s and R = (1 − d)/d · a0 (MuJoCo scales R
+// by the fixed a0, not by a). A gap (s >= 0) is a rigid speculative row that lets the gap
+// close within this substep.
+struct Row {
+    tgt: f32,
+    r: f32,
+    meff: f32,
+}
+
+fn normal_row(s: f32, v0: f32, a: f32, a0: f32) -> Row {
+    if s >= 0.0 {
+        return Row(-s / DT, 0.0, 1.0 / max(a, 1e-12));
+    }
+    let d = impedance(s);
+    let r = (1.0 - d) / d * a0;
+    return Row(v0 - DT * (REF_B * v0 + REF_K * d * s), r, 1.0 / max(a + r, 1e-12));
+}
+
+// The translational inverse weight of body b (0 for the static world).
+fn body_weight(b: i32) -> f32 {
+    if b < 0 {
+        return 0.0;
+    }
+    return body_invw[b];
 }
 
 // Contact c between bodies ba and bb (body code: -1 static, link, NL + object).
@@ -732,8 +771,24 @@ fn build_contact(c: u32) {
         }
     }
     k_info[c] = info;
-    k_meff[c] = 1.0 / max(k, vec3<f32>(1e-12));
-    k_bias[c] = soft_bias(c_sep[c]);
+    // Start velocities of the three rows.
+    var v0 = contact_object_vel0(info, k_pa[c], k_pb[c]) * basis;
+    if (info & ROW_ARM) != 0u {
+        for (var d = 0u; d < 3u; d++) {
+            v0[d] += arm_dot0((c * 3u + d) * ND1);
+        }
+    }
+    let n = normal_row(c_sep[c], v0.x, k.x, body_weight(ba) + body_weight(bb));
+    // Tangents: R = R_n / IMPRATIO and aref = -B v (MuJoCo's elliptic cones); a speculative
+    // contact's tangents are rigid.
+    let rt = n.r / IMPRATIO;
+    var tt = v0.yz * (1.0 - DT * REF_B);
+    if c_sep[c] >= 0.0 {
+        tt = vec2<f32>(0.0);
+    }
+    k_meff[c] = vec3<f32>(n.meff, 1.0 / max(k.yz + rt, vec2<f32>(1e-12)));
+    k_tgt[c] = vec3<f32>(n.tgt, tt);
+    k_r[c] = n.r;
     k_lam[c] = vec3<f32>(0.0);
 }
 
@@ -741,8 +796,18 @@ fn build_contact(c: u32) {
 fn limit_row(jt: array<f32, ND1>, slot: u32, s: f32) {
     let l = nlim;
     nlim += 1u;
-    l_meff[l] = 1.0 / max(arm_row(3u * MAX_C + l, jt), 1e-12);
-    l_bias[l] = soft_bias(s);
+    var v0 = 0.0;
+    for (var d = 0u; d < ND1; d++) {
+        v0 += jt[d] * qd0[d];
+    }
+    var a0 = 0.0;
+    for (var d = 0u; d < ND1; d++) {
+        a0 += abs(jt[d]) * dof_invw[d];
+    }
+    let row = normal_row(s, v0, arm_row(3u * MAX_C + l, jt), a0);
+    l_meff[l] = row.meff;
+    l_tgt[l] = row.tgt;
+    l_r[l] = row.r;
     l_lam[l] = 0.0;
     l_slot[l] = slot;
 }
@@ -775,6 +840,29 @@ fn contact_object_vel(c: u32, info: u32) -> vec3<f32> {
         v -= obj_point_vel(ob, k_pb[c]);
     }
     return v;
+}
+
+// The same at the start of the substep, for levers pa and pb.
+fn contact_object_vel0(info: u32, pa: vec3<f32>, pb: vec3<f32>) -> vec3<f32> {
+    var v = vec3<f32>(0.0);
+    let oa = object_a(info);
+    if oa >= 0 {
+        v = ovel0[oa] + cross(oang0[oa], pa);
+    }
+    let ob = object_b(info);
+    if ob >= 0 {
+        v -= ovel0[ob] + cross(oang0[ob], pb);
+    }
+    return v;
+}
+
+// J_arm q̇ at the start of the substep of the row at `base`.
+fn arm_dot0(base: u32) -> f32 {
+    var s = 0.0;
+    for (var d = 0u; d < ND1; d++) {
+        s += r_j[base + d] * qd0[d];
+    }
+    return s;
 }
 
 // Applies the world impulse `impulse` (side a; −impulse on side b) of contact c to its free
@@ -858,28 +946,15 @@ fn store_warm() {
     }
 }
 
-// The new impulse of a normal or limit row with impulse lam, velocity jv, bias b and effective
-// mass meff; `soft` as in `solve`.
-fn normal_impulse(lam: f32, jv: f32, b: f32, meff: f32, soft: bool) -> f32 {
-    var bias = 0.0;
-    var ms = 1.0;
-    var is = 0.0;
-    if soft {
-        bias = b;
-        if b <= 0.0 {
-            ms = SOFT_MS;
-            is = SOFT_IS;
-        }
-    } else if b > 0.0 {
-        // A gap still open after the position update may keep closing.
-        bias = b;
-    }
-    return max(lam - meff * ms * (jv + bias) - is * lam, 0.0);
+// The new impulse of a normal or limit row with impulse lam and velocity jv (target tgt,
+// regulariser r, 1 / (a + r) = meff; see `normal_row`).
+fn normal_impulse(lam: f32, jv: f32, tgt: f32, r: f32, meff: f32) -> f32 {
+    return max(lam - RELAXATION * meff * (jv - tgt + r * lam), 0.0);
 }
 
 // One Gauss–Seidel visit of contact c: its normal row, then both tangents together, clamped to
 // the friction disk μ λn.
-fn solve_contact(c: u32, soft: bool) {
+fn solve_contact(c: u32) {
     let info = k_info[c];
     let arm = (info & ROW_ARM) != 0u;
     let basis = contact_basis(c_n[c]);
@@ -890,7 +965,9 @@ fn solve_contact(c: u32, soft: bool) {
     if arm {
         jn += arm_dot(row);
     }
-    let ln = normal_impulse(lam.x, jn, k_bias[c], meff.x, soft);
+    let tgt = k_tgt[c];
+    let r = k_r[c];
+    let ln = normal_impulse(lam.x, jn, tgt.x, r, meff.x);
     if ln != lam.x {
         contact_object_push(c, info, basis[0] * (ln - lam.x));
         if arm {
@@ -905,7 +982,7 @@ fn solve_contact(c: u32, soft: bool) {
         if arm {
             jt += vec2<f32>(arm_dot(row + ND1), arm_dot(row + 2u * ND1));
         }
-        lt = lam.yz - meff.yz * jt;
+        lt = lam.yz - RELAXATION * meff.yz * (jt - tgt.yz + (r / IMPRATIO) * lam.yz);
         let mag = length(lt);
         if mag > lim {
             lt *= lim / max(mag, 1e-20);
@@ -925,20 +1002,18 @@ fn solve_contact(c: u32, soft: bool) {
     }
 }
 
-// `sweeps` of projected Gauss–Seidel over the contacts, then the limit rows; `soft` uses the
-// soft-constraint bias, otherwise (relaxation after the position update) rows are rigid and
-// unbiased. An impulse that does not change applies nothing, and the tangents of a contact
-// without normal impulse (friction limit 0) need no velocity at all: speculative contacts cost
-// little.
-fn solve(soft: bool, sweeps: u32) {
+// `sweeps` of over-relaxed projected Gauss–Seidel over the contacts, then the limit rows. An
+// impulse that does not change applies nothing, and the tangents of a contact without normal
+// impulse (friction limit 0) need no velocity at all: speculative contacts cost little.
+fn solve(sweeps: u32) {
     for (var it = 0u; it < sweeps; it++) {
         for (var c = 0u; c < nc; c++) {
-            solve_contact(c, soft);
+            solve_contact(c);
         }
         for (var l = 0u; l < nlim; l++) {
             let row = (3u * MAX_C + l) * ND1;
             let lam = l_lam[l];
-            let nl = normal_impulse(lam, arm_dot(row), l_bias[l], l_meff[l], soft);
+            let nl = normal_impulse(lam, arm_dot(row), l_tgt[l], l_r[l], l_meff[l]);
             if nl != lam {
                 arm_axpy(row, nl - lam);
                 l_lam[l] = nl;
@@ -950,6 +1025,9 @@ fn solve(soft: bool, sweeps: u32) {
 // ---------------------------------------------------------------- the step
 
 fn substep() {
+    qd0 = qd;
+    ovel0 = ovel;
+    oang0 = oang;
     kinematics();
     rnea_bias();
     crba();
@@ -958,10 +1036,8 @@ fn substep() {
     collide();
     build_rows();
     warm_start();
-    solve(true, ITERATIONS);
+    solve(ITERATIONS);
     integrate();
-    // Relaxation removes the velocity the soft bias added (Box2D's relax step).
-    solve(false, ITERATIONS);
     store_warm();
 }
 

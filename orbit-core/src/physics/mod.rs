@@ -23,8 +23,9 @@ pub struct SimCfg {
     /// Gravity vector (m/s²).
     #[serde(default = "default_gravity")]
     pub gravity: Vec3,
-    /// Velocity-solver iterations per step.
-    #[serde(default = "default_iterations")]
+    /// Velocity-solver iterations per step (0 = the backend's own default: 4 for rapier, 12
+    /// Gauss–Seidel sweeps for wgpu).
+    #[serde(default)]
     pub solver_iterations: usize,
     /// Name of the physics backend (`"rapier"`, `"wgpu"`).
     #[serde(default = "default_backend")]
@@ -40,9 +41,6 @@ fn default_dt() -> f32 {
 fn default_gravity() -> Vec3 {
     Vec3::new(0.0, 0.0, -9.81)
 }
-fn default_iterations() -> usize {
-    4
-}
 fn default_backend() -> String {
     "rapier".to_string()
 }
@@ -52,7 +50,7 @@ impl Default for SimCfg {
         Self {
             dt: default_dt(),
             gravity: default_gravity(),
-            solver_iterations: default_iterations(),
+            solver_iterations: 0,
             backend: default_backend(),
             num_threads: 0,
         }
@@ -74,12 +72,17 @@ impl SimCfg {
                 self.gravity
             )));
         }
-        if self.solver_iterations == 0 {
-            return Err(PhysicsError::InvalidInput(
-                "sim.solver_iterations must be at least 1".into(),
-            ));
-        }
         Ok(())
+    }
+
+    /// The solver iterations to run: `solver_iterations`, or the backend's `default` when it
+    /// is 0.
+    pub fn iterations_or(&self, default: usize) -> usize {
+        if self.solver_iterations == 0 {
+            default
+        } else {
+            self.solver_iterations
+        }
     }
 }
 
