@@ -18,8 +18,7 @@ use orbit_core::physics::SimCfg;
 use orbit_core::scene::JointKind;
 
 use crate::compile::{
-    CONTACT_IMPRATIO, CONTACT_MARGIN, CONTACT_SOLIMP, CONTACT_SOLREF, CompiledScene,
-    DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS, SOLVER_RELAXATION,
+    CONTACT_MARGIN, CompiledScene, DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS, SOLVER_RELAXATION,
 };
 use crate::layout;
 use crate::weights::InverseWeights;
@@ -132,13 +131,14 @@ impl Gen<'_> {
             format!("{}u", sim.iterations_or(DEFAULT_SOLVER_ITERATIONS)),
         );
         c(self, "MARGIN", f(CONTACT_MARGIN));
-        c(self, "TIMECONST", f(CONTACT_SOLREF[0]));
-        c(self, "DAMPRATIO", f(CONTACT_SOLREF[1]));
-        c(self, "IMP0", f(CONTACT_SOLIMP[0]));
-        c(self, "IMP1", f(CONTACT_SOLIMP[1]));
-        c(self, "IMP_WIDTH", f(CONTACT_SOLIMP[2]));
-        c(self, "IMP_MID", f(CONTACT_SOLIMP[3]));
-        c(self, "IMPRATIO", f(CONTACT_IMPRATIO));
+        let contact = &sim.contact;
+        c(self, "REF_K", f(contact.stiffness(sim.dt)));
+        c(self, "REF_B", f(contact.damping(sim.dt)));
+        c(self, "IMP0", f(contact.solimp.0));
+        c(self, "IMP1", f(contact.solimp.1));
+        c(self, "IMP_WIDTH", f(contact.solimp.2));
+        c(self, "IMP_MID", f(contact.solimp.3));
+        c(self, "IMPRATIO", f(contact.impratio));
         c(self, "RELAXATION", f(SOLVER_RELAXATION));
         let weights = InverseWeights::new(s);
         let list = |v: &[f32]| {

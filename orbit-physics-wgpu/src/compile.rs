@@ -21,15 +21,6 @@ pub const MAX_OBJECTS: usize = 254;
 pub const MAX_CONTACTS: usize = 12;
 /// Contacts are generated up to this gap (m) and solved speculatively.
 pub const CONTACT_MARGIN: f32 = 0.005;
-/// Contact and joint-limit rows are MuJoCo's soft constraints with its default `solref`
-/// (time constant in s, damping ratio), which every contact of the box-pushing scene uses
-/// (`box_pushing.md` §3.1).
-pub const CONTACT_SOLREF: [f32; 2] = [0.02, 1.0];
-/// MuJoCo's default `solimp` (d0, dwidth, width in m, midpoint; power 2).
-pub const CONTACT_SOLIMP: [f32; 4] = [0.9, 0.95, 0.001, 0.5];
-/// MuJoCo's `impratio`: a friction row's regulariser is the normal row's divided by this
-/// (the box-pushing scene sets 3, with elliptic cones).
-pub const CONTACT_IMPRATIO: f32 = 3.0;
 /// Over-relaxation factor of the Gauss–Seidel sweeps. Any factor in (0, 2) converges to the
 /// same solution of MuJoCo's convex problem; 1.5 gets there in fewer sweeps
 /// (docs/fidelity.md).

@@ -27,14 +27,7 @@ use orbit_core::physics::{
 use orbit_core::scene::{RootState, SceneDesc};
 use rayon::prelude::*;
 
-pub use compile::{
-    CONTACT_IMPRATIO, CONTACT_SOLIMP, CONTACT_SOLREF, DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS,
-    MAX_DOFS, MAX_LINKS,
-};
-
-/// Below the slip speed μ g / rate a contact's friction acts as a damper of this rate (1/s):
-/// MuJoCo's reference acceleration −B v of a friction row, B = 2 / (d_width · timeconst).
-pub const FRICTION_DAMPING_RATE: f32 = 2.0 / (CONTACT_SOLIMP[1] * CONTACT_SOLREF[0]);
+pub use compile::{DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS, MAX_DOFS, MAX_LINKS};
 pub use gpu::{Gpu, gpu};
 
 use compile::CompiledScene;

@@ -117,10 +117,8 @@ var<private> r_j: array<f32, RMAX * ND1>;
 var<private> r_w: array<f32, RMAX * ND1>;
 
 const ROW_ARM: u32 = 4u;
-// MuJoCo's reference acceleration aref = -B v - K imp(pos) pos of a row with velocity v and
-// distance pos, from solref (timeconst, dampratio) and the impedance's upper end IMP1.
-const REF_K: f32 = 1.0 / (IMP1 * IMP1 * TIMECONST * TIMECONST * DAMPRATIO * DAMPRATIO);
-const REF_B: f32 = 2.0 / (IMP1 * TIMECONST);
+// MuJoCo's reference acceleration aref = -REF_B v - REF_K d(pos) pos of a row with velocity v
+// and distance pos (`ContactCfg::stiffness`, `ContactCfg::damping`).
 // Velocities at the start of the substep (MuJoCo's reference acceleration uses them).
 var<private> qd0: array<f32, ND1>;
 var<private> ovel0: array<vec3<f32>, NO1>;

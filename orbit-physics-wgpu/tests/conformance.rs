@@ -33,7 +33,7 @@ fn sliding_box_decelerates_at_mu_g() {
         orbit_conformance::sliding_box_decelerates_at_mu_g(
             BACKEND_NAME,
             orbit_conformance::LowSpeedFriction::Damped {
-                rate: orbit_physics_wgpu::FRICTION_DAMPING_RATE,
+                rate: orbit_core::physics::ContactCfg::default().damping(0.002),
             },
         );
     }

@@ -2,12 +2,14 @@
 //! steps them together. State is published as batched arrays, one row per env (structure of
 //! arrays: one array per quantity). All poses are relative to each env's own origin.
 
+mod contact;
 mod layout;
 mod registry;
 
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+pub use contact::ContactCfg;
 pub use layout::*;
 pub use registry::*;
 
@@ -33,6 +35,9 @@ pub struct SimCfg {
     /// Worker threads for CPU backends (0 = one per core).
     #[serde(default)]
     pub num_threads: usize,
+    /// Contact softness in MuJoCo's terms (the wgpu backend; rapier keeps its own).
+    #[serde(default)]
+    pub contact: ContactCfg,
 }
 
 fn default_dt() -> f32 {
@@ -53,6 +58,7 @@ impl Default for SimCfg {
             solver_iterations: 0,
             backend: default_backend(),
             num_threads: 0,
+            contact: ContactCfg::default(),
         }
     }
 }
@@ -72,7 +78,7 @@ impl SimCfg {
                 self.gravity
             )));
         }
-        Ok(())
+        self.contact.validate()
     }
 
     /// The solver iterations to run: `solver_iterations`, or the backend's `default` when it
