@@ -40,8 +40,21 @@ impl Mlp {
         Self { layers, activation }
     }
 
-    /// Applies the network to a batch of rows.
-    pub fn forward(&self, mut x: Tensor<2>) -> Tensor<2> {
+    /// Applies the network to a batch of rows. Large batches go through as `[chunks, rows,
+    /// features]` batched products (see [`row_chunks`]): the result is the same, but the
+    /// backward pass's weight gradients become many partial products summed afterwards.
+    pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
+        let [n, d] = x.dims();
+        let chunks = row_chunks(n);
+        if chunks > 1 {
+            let y = self.forward_nd(x.reshape([chunks, n / chunks, d]));
+            let out = y.dims()[2];
+            return y.reshape([n, out]);
+        }
+        self.forward_nd(x)
+    }
+
+    fn forward_nd<const D: usize>(&self, mut x: Tensor<D>) -> Tensor<D> {
         let last = self.layers.len() - 1;
         for (i, layer) in self.layers.iter().enumerate() {
             x = layer.forward(x);
@@ -60,6 +73,22 @@ impl Mlp {
     }
 }
 
+/// The number of equal chunks (a power of two, at most 256, each of at least 1 024 rows) a
+/// batch of `n` rows is split into. A layer's weight gradient is `xᵀ g`: a small
+/// `d_in × d_out` product over all `n` rows, which a GPU matmul kernel tiles over its output
+/// only, so a few workgroups do all the work. As a batched product each chunk gets its own
+/// workgroups and the partial gradients are summed afterwards ("split-K"); at 65 536 envs this
+/// halves the update on an H100 (docs/benchmarks.md).
+fn row_chunks(n: usize) -> usize {
+    const MAX_CHUNKS: usize = 256;
+    const MIN_ROWS: usize = 1024;
+    let mut c = 1;
+    while c < MAX_CHUNKS && n.is_multiple_of(2 * c) && n / (2 * c) >= MIN_ROWS {
+        c *= 2;
+    }
+    c
+}
+
 /// SELU's constants (Klambauer et al. 2017, as in PyTorch).
 const SELU_ALPHA: f64 = 1.673_263_242_354_377_3;
 const SELU_SCALE: f64 = 1.050_700_987_355_480_5;
@@ -69,7 +98,7 @@ const SELU_SCALE: f64 = 1.050_700_987_355_480_5;
 /// SELU take `eˣ` of every element and mask it out where `x > 0`; for `x > 88` that is ∞ in
 /// `f32`, and the backward pass multiplies the masked-out zero gradient by it: NaN weights
 /// once a pre-activation passes 88.
-fn elu(x: Tensor<2>, scale: f64, alpha: f64) -> Tensor<2> {
+fn elu<const D: usize>(x: Tensor<D>, scale: f64, alpha: f64) -> Tensor<D> {
     let positive = x.clone().clamp_min(0.0).mul_scalar(scale);
     let negative = x.clamp_max(0.0).exp().sub_scalar(1.0).mul_scalar(alpha);
     positive + negative
@@ -174,5 +203,55 @@ mod tests {
         let g: Vec<f32> = x.grad(&grads).unwrap().into_data().try_into_vec().unwrap();
         assert_eq!(g[0], 1.0);
         assert!((g[1] - (-2.0f32).exp()).abs() < 1e-6, "{g:?}");
+    }
+
+    /// Chunk counts: powers of two, at most 256, chunks of at least 1 024 rows.
+    #[test]
+    fn row_chunks_split_large_batches_only() {
+        assert_eq!(row_chunks(393_216), 256);
+        assert_eq!(row_chunks(24_576), 16);
+        assert_eq!(row_chunks(4_096), 4);
+        assert_eq!(row_chunks(1_536), 1);
+        assert_eq!(row_chunks(3_000), 2);
+        assert_eq!(row_chunks(1_001), 1);
+    }
+
+    /// The chunked forward pass gives the rows and weight gradients of the plain one (to
+    /// float rounding: the gradient sums its rows in another order).
+    #[test]
+    fn chunked_forward_matches_plain() {
+        let device = Device::flex().autodiff();
+        let mut rng = EnvRng::new(7, 0, 0);
+        let mlp = Mlp::new(&[5, 16, 3], Activation::Elu, &mut rng, &device);
+        let n = 4096;
+        let data: Vec<f32> = (0..n * 5).map(|_| rng.uniform_range(-2.0, 2.0)).collect();
+        let x = Tensor::<2>::from_data(TensorData::new(data, [n, 5]), &device);
+        assert_eq!(row_chunks(n), 4);
+        let chunked = mlp.forward(x.clone());
+        let plain = mlp.forward_nd(x);
+        let a: Vec<f32> = chunked.clone().into_data().try_into_vec().unwrap();
+        let b: Vec<f32> = plain.clone().into_data().try_into_vec().unwrap();
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f32::max);
+        assert!(worst < 1e-5, "outputs differ by {worst}");
+        let weight = |y: Tensor<2>| -> Vec<f32> {
+            let grads = y.powf_scalar(2.0).sum().backward();
+            let w = mlp.layers[0].weight.val();
+            w.grad(&grads).unwrap().into_data().try_into_vec().unwrap()
+        };
+        let (ga, gb) = (weight(chunked), weight(plain));
+        let scale = gb.iter().fold(0.0f32, |m, g| m.max(g.abs()));
+        let worst = ga
+            .iter()
+            .zip(&gb)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f32::max);
+        assert!(
+            worst < 1e-5 * scale,
+            "gradients differ by {worst} (scale {scale})"
+        );
     }
 }
