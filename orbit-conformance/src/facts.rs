@@ -1,6 +1,7 @@
 //! Physical facts with closed-form answers.
 
 use glam::Vec3;
+use orbit_core::physics::SimCfg;
 use orbit_core::scene::{RootState, RootStateCfg, SceneCfg};
 
 use crate::scenes::*;
@@ -141,6 +142,12 @@ pub enum LowSpeedFriction {
 /// (measured from its speed between 0.05 s and 0.15 s) within 3 %, and its speed falls under
 /// 1 mm/s within 20 ms of when the backend's friction law says it should.
 pub fn sliding_box_decelerates_at_mu_g(backend: &str, low_speed: LowSpeedFriction) {
+    sliding_box_decelerates_at_mu_g_with(&sim_cfg(backend), low_speed);
+}
+
+/// [`sliding_box_decelerates_at_mu_g`] with these simulation settings.
+pub fn sliding_box_decelerates_at_mu_g_with(sim: &SimCfg, low_speed: LowSpeedFriction) {
+    let backend = sim.backend.as_str();
     let mu = 0.5;
     let half = Vec3::new(0.05, 0.05, 0.02);
     let init = RootStateCfg {
@@ -155,11 +162,11 @@ pub fn sliding_box_decelerates_at_mu_g(backend: &str, low_speed: LowSpeedFrictio
         static_objects: vec![table(0.0, mu)],
     };
     let h = 0.002;
-    let mut sim = build(backend, &resolve(&cfg), 1, h);
+    let mut world = build_with(sim, &resolve(&cfg), 1, h);
     let mut speeds = Vec::new();
     for _ in 0..250 {
-        sim.step().expect("step");
-        speeds.push(sim.rigid_object(0).lin_vel[0].x);
+        world.step().expect("step");
+        speeds.push(world.rigid_object(0).lin_vel[0].x);
     }
     let (i0, i1) = (25, 75);
     let decel = (speeds[i0 - 1] - speeds[i1 - 1]) / ((i1 - i0) as f32 * h);

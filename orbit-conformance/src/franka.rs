@@ -9,7 +9,7 @@ use orbit_core::physics::PhysicsBackend;
 use orbit_core::scene::{PerJoint, SceneCfg};
 use serde::Deserialize;
 
-use crate::scenes::{build, resolve};
+use crate::scenes::{build, build_with, resolve, sim_cfg};
 
 /// The bundled box-pushing scene config (Franka with push rod, table, box).
 pub fn box_pushing_scene_cfg() -> SceneCfg {
@@ -181,7 +181,12 @@ pub struct RolloutAgreement {
 /// ProMP cases within `promp_tolerance` rad over the whole episode (the open-loop `torque_sine`
 /// case diverges through contact and joint-limit impacts, and is only reported).
 pub fn franka_tracks_mujoco_rollouts(backend: &str, promp_tolerance: f64) {
-    for r in franka_mujoco_rollouts(backend) {
+    franka_tracks_mujoco_rollouts_with(&sim_cfg(backend), promp_tolerance);
+}
+
+/// [`franka_tracks_mujoco_rollouts`] with these simulation settings.
+pub fn franka_tracks_mujoco_rollouts_with(sim: &orbit_core::physics::SimCfg, promp_tolerance: f64) {
+    for r in franka_mujoco_rollouts_with(sim) {
         assert!(
             r.joint_rms_before_contact <= 0.005,
             "{}: joint RMS before contact {} rad exceeds 0.005 rad",
@@ -204,13 +209,19 @@ pub fn franka_tracks_mujoco_rollouts(backend: &str, promp_tolerance: f64) {
 /// recorded (`normalized_torque`) or recomputed by the ProMP PD controller from the current state
 /// (`promp_pd`), all cases side by side as envs of one backend. Returns the agreement per case.
 pub fn franka_mujoco_rollouts(backend: &str) -> Vec<RolloutAgreement> {
+    franka_mujoco_rollouts_with(&sim_cfg(backend))
+}
+
+/// [`franka_mujoco_rollouts`] with these simulation settings.
+pub fn franka_mujoco_rollouts_with(sim_cfg: &orbit_core::physics::SimCfg) -> Vec<RolloutAgreement> {
+    let backend = sim_cfg.backend.as_str();
     let data: Rollouts =
         serde_json::from_str(include_str!("../data/mujoco_box_pushing_rollouts.json"))
             .expect("rollout data");
     let scene = resolve(&box_pushing_scene_cfg());
     let n = data.cases.len();
     let dofs = 7;
-    let mut sim = build(backend, &scene, n, 0.002);
+    let mut sim = build_with(sim_cfg, &scene, n, 0.002);
     let ids: Vec<usize> = (0..n).collect();
     sim.write_joint_state(0, &ids, &data.initial_arm_q.repeat(n), &vec![0.0; n * dofs])
         .expect("initial state");

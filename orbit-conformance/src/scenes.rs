@@ -21,14 +21,31 @@ pub fn build(
     num_envs: usize,
     dt: f32,
 ) -> Box<dyn PhysicsBackend> {
+    build_with(&sim_cfg(backend), scene, num_envs, dt)
+}
+
+/// The default simulation settings for a backend.
+pub fn sim_cfg(backend: &str) -> SimCfg {
+    SimCfg {
+        backend: backend.to_string(),
+        ..SimCfg::default()
+    }
+}
+
+/// Builds a backend with `sim`'s settings (its step set to `dt`, one thread) for a scene.
+pub fn build_with(
+    sim: &SimCfg,
+    scene: &SceneDesc,
+    num_envs: usize,
+    dt: f32,
+) -> Box<dyn PhysicsBackend> {
     let sim = SimCfg {
         dt,
-        backend: backend.to_string(),
         num_threads: 1,
-        ..SimCfg::default()
+        ..sim.clone()
     };
     build_backend(scene, num_envs, &sim)
-        .unwrap_or_else(|e| panic!("backend `{backend}` failed to build: {e}"))
+        .unwrap_or_else(|e| panic!("backend `{}` failed to build: {e}", sim.backend))
 }
 
 /// A box shape with a material.

@@ -14,11 +14,11 @@
 use std::fmt::Write as _;
 
 use glam::{Mat3, Quat, Vec3};
-use orbit_core::physics::SimCfg;
+use orbit_core::physics::{ContactModel, SimCfg};
 use orbit_core::scene::JointKind;
 
 use crate::compile::{
-    CONTACT_MARGIN, CompiledScene, DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS, SOLVER_RELAXATION,
+    CONTACT_MARGIN, CompiledScene, MAX_CONTACTS, SOLVER_RELAXATION, default_solver_iterations,
 };
 use crate::layout;
 use crate::weights::InverseWeights;
@@ -128,10 +128,29 @@ impl Gen<'_> {
         c(
             self,
             "ITERATIONS",
-            format!("{}u", sim.iterations_or(DEFAULT_SOLVER_ITERATIONS)),
+            format!(
+                "{}u",
+                sim.iterations_or(default_solver_iterations(&sim.contact.model))
+            ),
         );
         c(self, "MARGIN", f(CONTACT_MARGIN));
         let contact = &sim.contact;
+        // MuJoCo's rows (`normal_row` in step.wgsl); the soft step's as its target and
+        // regulariser scales.
+        let (soft_step, relaxation, soft_target, soft_r) = match contact.model {
+            ContactModel::MuJoCo => (false, SOLVER_RELAXATION, 0.0, 0.0),
+            ContactModel::SoftStep {
+                frequency,
+                damping_ratio,
+            } => {
+                let a1 = 2.0 * damping_ratio + sim.dt * frequency;
+                (true, 1.0, frequency / a1, 1.0 / (sim.dt * frequency * a1))
+            }
+        };
+        c(self, "SOFT_STEP", soft_step.to_string());
+        c(self, "RELAXATION", f(relaxation));
+        c(self, "SOFT_TARGET_SCALE", f(soft_target));
+        c(self, "SOFT_R_SCALE", f(soft_r));
         c(self, "REF_K", f(contact.stiffness(sim.dt)));
         c(self, "REF_B", f(contact.damping(sim.dt)));
         c(self, "IMP0", f(contact.solimp.0));
@@ -139,7 +158,6 @@ impl Gen<'_> {
         c(self, "IMP_WIDTH", f(contact.solimp.2));
         c(self, "IMP_MID", f(contact.solimp.3));
         c(self, "IMPRATIO", f(contact.impratio));
-        c(self, "RELAXATION", f(SOLVER_RELAXATION));
         let weights = InverseWeights::new(s);
         let list = |v: &[f32]| {
             if v.is_empty() {

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 use orbit_core::math::Pose;
-use orbit_core::physics::PhysicsError;
+use orbit_core::physics::{ContactModel, PhysicsError};
 use orbit_core::scene::{Geometry, Inertial, JointKind, SceneDesc, Shape};
 
 use crate::BACKEND_NAME;
@@ -25,8 +25,15 @@ pub const CONTACT_MARGIN: f32 = 0.005;
 /// same solution of MuJoCo's convex problem; 1.5 gets there in fewer sweeps
 /// (docs/fidelity.md).
 pub const SOLVER_RELAXATION: f32 = 1.5;
-/// Gauss–Seidel sweeps per substep when `sim.solver_iterations` is 0 (the default).
-pub const DEFAULT_SOLVER_ITERATIONS: usize = 12;
+/// Solver iterations per substep when `sim.solver_iterations` is 0 (the default): 12
+/// Gauss–Seidel sweeps for MuJoCo's model, 4 iterations of a sweep before and one after the
+/// position update for the soft step.
+pub fn default_solver_iterations(model: &ContactModel) -> usize {
+    match model {
+        ContactModel::MuJoCo => 12,
+        ContactModel::SoftStep { .. } => 4,
+    }
+}
 
 /// A link of the global link forest.
 #[derive(Clone, Debug)]

@@ -27,7 +27,7 @@ use orbit_core::physics::{
 use orbit_core::scene::{RootState, SceneDesc};
 use rayon::prelude::*;
 
-pub use compile::{DEFAULT_SOLVER_ITERATIONS, MAX_CONTACTS, MAX_DOFS, MAX_LINKS};
+pub use compile::{MAX_CONTACTS, MAX_DOFS, MAX_LINKS, default_solver_iterations};
 pub use gpu::{Gpu, gpu};
 
 use compile::CompiledScene;

@@ -723,12 +723,51 @@ struct Row {
 }
 
 fn normal_row(s: f32, v0: f32, a: f32, a0: f32) -> Row {
+    if SOFT_STEP {
+        // Box2D's soft step (`ContactModel::SoftStep`) is the same kind of row: its bias
+        // s·ω/(2ζ + hω) as target, R = a / (hω(2ζ + hω)); the relaxation sweeps after the
+        // position update (`relax_rows`) then take out the velocity it added.
+        if s > 0.0 {
+            return Row(-s / DT, 0.0, 1.0 / max(a, 1e-12));
+        }
+        let r = a * SOFT_R_SCALE;
+        return Row(-s * SOFT_TARGET_SCALE, r, 1.0 / max(a + r, 1e-12));
+    }
     if s >= 0.0 {
         return Row(-s / DT, 0.0, 1.0 / max(a, 1e-12));
     }
     let d = impedance(s);
     let r = (1.0 - d) / d * a0;
     return Row(v0 - DT * (REF_B * v0 + REF_K * d * s), r, 1.0 / max(a + r, 1e-12));
+}
+
+// The soft step's relaxation rows: penetrating rows become rigid with target 0 (a gap keeps its
+// speculative target).
+fn relax_rows() {
+    for (var c = 0u; c < nc; c++) {
+        let r = k_r[c];
+        if r != 0.0 {
+            k_meff[c].x = 1.0 / max(1.0 / k_meff[c].x - r, 1e-12);
+            k_r[c] = 0.0;
+            k_tgt[c].x = 0.0;
+        }
+    }
+    for (var l = 0u; l < nlim; l++) {
+        let r = l_r[l];
+        if r != 0.0 {
+            l_meff[l] = 1.0 / max(1.0 / l_meff[l] - r, 1e-12);
+            l_r[l] = 0.0;
+            l_tgt[l] = 0.0;
+        }
+    }
+}
+
+// A friction row's regulariser for a normal row's r.
+fn friction_r(r: f32) -> f32 {
+    if SOFT_STEP {
+        return 0.0;
+    }
+    return r / IMPRATIO;
 }
 
 // The translational inverse weight of body b (0 for the static world).
@@ -777,10 +816,13 @@ fn build_contact(c: u32) {
         }
     }
     let n = normal_row(c_sep[c], v0.x, k.x, body_weight(ba) + body_weight(bb));
-    // Tangents: R = R_n / IMPRATIO and aref = -B v (MuJoCo's elliptic cones); a speculative
-    // contact's tangents are rigid.
-    let rt = n.r / IMPRATIO;
+    // Tangents: R = R_n / IMPRATIO and target v0 (1 − h B) (MuJoCo's elliptic cones); rigid
+    // for the soft step and for a speculative contact.
+    let rt = friction_r(n.r);
     var tt = v0.yz * (1.0 - DT * REF_B);
+    if SOFT_STEP {
+        tt = vec2<f32>(0.0);
+    }
     if c_sep[c] >= 0.0 {
         tt = vec2<f32>(0.0);
     }
@@ -980,7 +1022,7 @@ fn solve_contact(c: u32) {
         if arm {
             jt += vec2<f32>(arm_dot(row + ND1), arm_dot(row + 2u * ND1));
         }
-        lt = lam.yz - RELAXATION * meff.yz * (jt - tgt.yz + (r / IMPRATIO) * lam.yz);
+        lt = lam.yz - RELAXATION * meff.yz * (jt - tgt.yz + friction_r(r) * lam.yz);
         let mag = length(lt);
         if mag > lim {
             lt *= lim / max(mag, 1e-20);
@@ -1036,6 +1078,10 @@ fn substep() {
     warm_start();
     solve(ITERATIONS);
     integrate();
+    if SOFT_STEP {
+        relax_rows();
+        solve(ITERATIONS);
+    }
     store_warm();
 }
 

@@ -1,16 +1,37 @@
-//! Contact softness in MuJoCo's terms (`solref`, `solimp`, `impratio`), which the wgpu backend
-//! solves as MuJoCo does (docs/physics.md). The rapier backend keeps rapier's own contact
-//! model and ignores these values.
+//! The wgpu backend's contact model: MuJoCo's soft constraints (`solref`, `solimp`,
+//! `impratio`), solved as MuJoCo does, or rigid friction with Box2D's soft step (docs/physics.md).
+//! The rapier backend keeps rapier's own contact model and ignores these values.
 
 use serde::{Deserialize, Serialize};
 
 use super::PhysicsError;
 
-/// Soft contact and joint-limit constraints, MuJoCo's parameters. The defaults are MuJoCo's,
-/// which every contact of Fancy Gym's box-pushing scene uses.
+/// How contacts and joint limits resolve penetration.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ContactModel {
+    /// MuJoCo's soft constraints with `solref`, `solimp` and `impratio` (the simulator of
+    /// Fancy Gym's tasks). Default solver: 12 over-relaxed Gauss–Seidel sweeps.
+    MuJoCo,
+    /// Rigid rows (friction included) that push out of penetration like a spring of
+    /// `frequency` (rad/s) and `damping_ratio`, with relaxation sweeps after the position update
+    /// so that pushing out adds no velocity (Box2D's soft step; near-rigid contacts as PhysX
+    /// gives the Orbit port). Default solver: 4 iterations, each a sweep before and one after
+    /// the position update.
+    SoftStep {
+        /// Natural frequency of the push-out (rad/s).
+        frequency: f32,
+        /// Its damping ratio.
+        damping_ratio: f32,
+    },
+}
+
+/// Contact and joint-limit constraints. The defaults are MuJoCo's, which every contact of Fancy
+/// Gym's box-pushing scene uses.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ContactCfg {
+    /// The contact model; `solref`, `solimp` and `impratio` apply to `MuJoCo`.
+    pub model: ContactModel,
     /// `(timeconst, dampratio)`: a penetration recovers like a mass-spring-damper of this time
     /// constant (s) and damping ratio. Smaller is stiffer; as in MuJoCo, a time constant under
     /// `2 · dt` counts as `2 · dt` (its stability limit).
@@ -27,6 +48,7 @@ pub struct ContactCfg {
 impl Default for ContactCfg {
     fn default() -> Self {
         Self {
+            model: ContactModel::MuJoCo,
             solref: (0.02, 1.0),
             solimp: (0.9, 0.95, 0.001, 0.5),
             impratio: 3.0,
@@ -83,6 +105,19 @@ impl ContactCfg {
             return bad(format!(
                 "sim.contact.impratio must be positive, got {}",
                 self.impratio
+            ));
+        }
+        if let ContactModel::SoftStep {
+            frequency,
+            damping_ratio,
+        } = self.model
+            && !(frequency.is_finite()
+                && frequency > 0.0
+                && damping_ratio.is_finite()
+                && damping_ratio > 0.0)
+        {
+            return bad(format!(
+                "sim.contact.model: SoftStep needs a positive frequency and damping ratio, got ({frequency}, {damping_ratio})"
             ));
         }
         Ok(())

@@ -36,11 +36,17 @@ const TEMPORAL_SPATIAL_SPARSE: &[&str] = &[
     "rewards.final_bonus=(func: \"spatial_sparse_bonus\", params: (only_at_end: true), weight: 50.0)",
 ];
 
+/// The near-rigid contact model of the implicit-PD tasks (Orbit's port ran on PhysX).
+const SOFT_STEP_CONTACTS: &str = "sim.contact.model=SoftStep(frequency: 200.0, damping_ratio: 1.0)";
+
 /// Joint-space control (Isaac Lab's way): the policy sets joint position targets around the
 /// default pose (`q* = q₀ + 0.5 a`) tracked by implicit PD drives with Isaac Lab's high-PD Franka
-/// gains (k = 400, d = 80); gravity is compensated by a feed-forward bias effort.
+/// gains (k = 400, d = 80); gravity is compensated by a feed-forward bias effort. Contacts are
+/// near-rigid (`SoftStep`), as PhysX gives the Orbit port: MuJoCo's soft contacts let the stiff
+/// drives press the rod into the box (docs/benchmarks.md).
 const JOINT_POS: &[&str] = &[
     "scene.overrides=[\"articulations[0].actuators.arm.stiffness=400.0\", \"articulations[0].actuators.arm.damping=80.0\"]",
+    SOFT_STEP_CONTACTS,
     "actions.arm=(func: \"joint_position\", params: (joint_names: [\"panda_joint[1-7]\"], scale: 0.5, use_default_offset: true, compensate_bias: true))",
 ];
 
@@ -49,6 +55,7 @@ const JOINT_POS: &[&str] = &[
 /// differential IK and tracked by implicit PD (k 400, d 80) with gravity compensation.
 const TASK_SPACE: &[&str] = &[
     "scene.overrides=[\"articulations[0].actuators.arm.stiffness=400.0\", \"articulations[0].actuators.arm.damping=80.0\"]",
+    SOFT_STEP_CONTACTS,
     "actions.arm=(func: \"differential_ik\", params: (joint_names: [\"panda_joint[1-7]\"], body_name: \"tcp\", scale: 0.02, command_type: Pose, use_relative_mode: true, ik_method: Dls(lambda_val: 0.01), compensate_bias: true))",
 ];
 
