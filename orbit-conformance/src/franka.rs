@@ -213,15 +213,17 @@ pub fn franka_mujoco_rollouts(backend: &str) -> Vec<RolloutAgreement> {
 }
 
 /// [`franka_mujoco_rollouts`] with these simulation settings.
-pub fn franka_mujoco_rollouts_with(sim_cfg: &orbit_core::physics::SimCfg) -> Vec<RolloutAgreement> {
-    let backend = sim_cfg.backend.as_str();
+pub fn franka_mujoco_rollouts_with(
+    settings: &orbit_core::physics::SimCfg,
+) -> Vec<RolloutAgreement> {
+    let backend = settings.backend.as_str();
     let data: Rollouts =
         serde_json::from_str(include_str!("../data/mujoco_box_pushing_rollouts.json"))
             .expect("rollout data");
     let scene = resolve(&box_pushing_scene_cfg());
     let n = data.cases.len();
     let dofs = 7;
-    let mut sim = build_with(sim_cfg, &scene, n, 0.002);
+    let mut sim = build_with(settings, &scene, n, 0.002);
     let ids: Vec<usize> = (0..n).collect();
     sim.write_joint_state(0, &ids, &data.initial_arm_q.repeat(n), &vec![0.0; n * dofs])
         .expect("initial state");
@@ -323,12 +325,11 @@ pub fn franka_mujoco_rollouts_with(sim_cfg: &orbit_core::physics::SimCfg) -> Vec
 /// returns the final joint positions and box poses as raw bytes.
 fn random_torque_run(backend: &str, num_envs: usize, threads: usize, seed: u64) -> Vec<u32> {
     let scene = resolve(&box_pushing_scene_cfg());
-    let sim_cfg = orbit_core::physics::SimCfg {
-        backend: backend.to_string(),
+    let settings = orbit_core::physics::SimCfg {
         num_threads: threads,
-        ..Default::default()
+        ..sim_cfg(backend)
     };
-    let mut sim = orbit_core::physics::build_backend(&scene, num_envs, &sim_cfg).expect("build");
+    let mut sim = orbit_core::physics::build_backend(&scene, num_envs, &settings).expect("build");
     let dofs = sim.layout().articulations[0].num_dofs();
     let mut rngs: Vec<_> = (0..num_envs as u32)
         .map(|e| orbit_core::rng::EnvRng::new(seed, e, orbit_core::rng::streams::POLICY))

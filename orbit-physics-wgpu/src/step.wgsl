@@ -95,9 +95,9 @@ var<private> c_slot: array<u32, MAX_C>;
 // the traffic of this storage (it lives in local memory, and 65 536 envs' worth does not fit in
 // L2), so it recomputes the tangents and the object terms instead. `k_info` holds whether a
 // contact has an arm part (ROW_ARM) and its two sides' free objects plus one (bits 8–15 and
-// 16–23, 0 for none). A penetrating contact or limit is MuJoCo's soft constraint (its rows'
-// target velocities `k_tgt` and the normal row's regulariser `k_r`; see `normal_row`), a gap a
-// rigid speculative row.
+// 16–23, 0 for none). A penetrating contact or limit is a soft row of the configured contact
+// model (its rows' target velocities `k_tgt` and the normal row's regulariser `k_r`; see
+// `normal_row`), a gap a rigid speculative row.
 var<private> k_info: array<u32, MAX_C>;
 var<private> k_pa: array<vec3<f32>, MAX_C>;
 var<private> k_pb: array<vec3<f32>, MAX_C>;
@@ -117,9 +117,8 @@ var<private> r_j: array<f32, RMAX * ND1>;
 var<private> r_w: array<f32, RMAX * ND1>;
 
 const ROW_ARM: u32 = 4u;
-// MuJoCo's reference acceleration aref = -REF_B v - REF_K d(pos) pos of a row with velocity v
-// and distance pos (`ContactCfg::stiffness`, `ContactCfg::damping`).
-// Velocities at the start of the substep (MuJoCo's reference acceleration uses them).
+// Velocities at the start of the substep: MuJoCo's reference acceleration
+// aref = −REF_B v − REF_K d(pos) pos uses them (`ContactCfg::stiffness`, `ContactCfg::damping`).
 var<private> qd0: array<f32, ND1>;
 var<private> ovel0: array<vec3<f32>, NO1>;
 var<private> oang0: array<vec3<f32>, NO1>;
@@ -723,18 +722,16 @@ struct Row {
 }
 
 fn normal_row(s: f32, v0: f32, a: f32, a0: f32) -> Row {
+    // The soft step pushes out of a contact at s = 0 as well.
+    if s > 0.0 || (s == 0.0 && !SOFT_STEP) {
+        return Row(-s / DT, 0.0, 1.0 / max(a, 1e-12));
+    }
     if SOFT_STEP {
         // Box2D's soft step (`ContactModel::SoftStep`) is the same kind of row: its bias
         // s·ω/(2ζ + hω) as target, R = a / (hω(2ζ + hω)); the relaxation sweeps after the
         // position update (`relax_rows`) then take out the velocity it added.
-        if s > 0.0 {
-            return Row(-s / DT, 0.0, 1.0 / max(a, 1e-12));
-        }
         let r = a * SOFT_R_SCALE;
         return Row(-s * SOFT_TARGET_SCALE, r, 1.0 / max(a + r, 1e-12));
-    }
-    if s >= 0.0 {
-        return Row(-s / DT, 0.0, 1.0 / max(a, 1e-12));
     }
     let d = impedance(s);
     let r = (1.0 - d) / d * a0;
@@ -820,10 +817,7 @@ fn build_contact(c: u32) {
     // for the soft step and for a speculative contact.
     let rt = friction_r(n.r);
     var tt = v0.yz * (1.0 - DT * REF_B);
-    if SOFT_STEP {
-        tt = vec2<f32>(0.0);
-    }
-    if c_sep[c] >= 0.0 {
+    if SOFT_STEP || c_sep[c] >= 0.0 {
         tt = vec2<f32>(0.0);
     }
     k_meff[c] = vec3<f32>(n.meff, 1.0 / max(k.yz + rt, vec2<f32>(1e-12)));
@@ -837,11 +831,9 @@ fn limit_row(jt: array<f32, ND1>, slot: u32, s: f32) {
     let l = nlim;
     nlim += 1u;
     var v0 = 0.0;
-    for (var d = 0u; d < ND1; d++) {
-        v0 += jt[d] * qd0[d];
-    }
     var a0 = 0.0;
     for (var d = 0u; d < ND1; d++) {
+        v0 += jt[d] * qd0[d];
         a0 += abs(jt[d]) * dof_invw[d];
     }
     let row = normal_row(s, v0, arm_row(3u * MAX_C + l, jt), a0);

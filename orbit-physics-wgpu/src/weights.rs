@@ -62,10 +62,11 @@ impl InverseWeights {
             .zip(&poses)
             .map(|(l, p)| p.transform_point(l.inertial.com).as_dvec3())
             .collect();
+        let jacobians: Vec<_> = (0..links.len()).map(|k| jacobian(k, coms[k])).collect();
         // M = Σ m Jpᵀ Jp + Jrᵀ I Jr, plus the armature.
         let mut m = vec![0.0f64; nd * nd];
         for (k, l) in links.iter().enumerate() {
-            let (jp, jr) = jacobian(k, coms[k]);
+            let (jp, jr) = &jacobians[k];
             let inertia: DMat3 = rotate_inertia(poses[k].rot, l.inertial.inertia).as_dmat3();
             let mass = f64::from(l.inertial.mass);
             for a in 0..nd {
@@ -79,9 +80,9 @@ impl InverseWeights {
         }
         let minv = invert(&m, nd);
         let dof = (0..nd).map(|d| minv[d * nd + d] as f32).collect();
-        let mut body: Vec<f32> = (0..links.len())
-            .map(|k| {
-                let (jp, _) = jacobian(k, coms[k]);
+        let mut body: Vec<f32> = jacobians
+            .iter()
+            .map(|(jp, _)| {
                 let mut trace = 0.0;
                 for a in 0..nd {
                     for b in 0..nd {
