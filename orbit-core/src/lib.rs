@@ -6,6 +6,7 @@
 pub mod config;
 pub mod kinematics;
 pub mod math;
+pub mod parallel;
 pub mod physics;
 pub mod rng;
 pub mod scene;

@@ -35,6 +35,11 @@ impl EnvRngs {
     pub fn get(&mut self, e: usize) -> &mut EnvRng {
         &mut self.rngs[e]
     }
+
+    /// Every env's stream, in env order (for loops over envs in parallel).
+    pub fn streams_mut(&mut self) -> &mut [EnvRng] {
+        &mut self.rngs
+    }
 }
 
 /// What terms read: the scene and the managers' public state.

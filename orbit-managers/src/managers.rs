@@ -3,6 +3,9 @@
 use std::collections::BTreeMap;
 
 use orbit_core::config::{Node, node_at};
+use orbit_core::parallel::MIN_ENVS_PER_TASK;
+use orbit_core::rng::EnvRng;
+use rayon::prelude::*;
 
 use crate::base_env::{EnvRngs, EnvView};
 use crate::cfg::{
@@ -242,48 +245,72 @@ impl ObservationManager {
     }
 
     pub(crate) fn compute(&mut self, env: &EnvView<'_>, noise: &mut EnvRngs) {
-        let n = env.scene.num_envs();
         for g in &mut self.groups {
             let mut offset = 0;
             for t in &mut g.terms {
                 let d = t.term.dim();
+                let width = t.out_dim();
                 t.term.compute(env, &mut t.buf);
-                for e in 0..n {
-                    let rng = noise.get(e);
-                    for v in &mut t.buf[e * d..(e + 1) * d] {
-                        *v += match t.noise {
-                            Some(NoiseCfg::Uniform { n_min, n_max }) => {
-                                rng.uniform_range(n_min, n_max)
-                            }
-                            Some(NoiseCfg::Gaussian { mean, std }) => mean + std * rng.normal(),
-                            None => 0.0,
-                        };
-                        if let Some((lo, hi)) = t.clip {
-                            *v = v.clamp(lo, hi);
-                        }
-                        if let Some(s) = t.scale {
-                            *v *= s;
-                        }
-                    }
-                    let row = &t.buf[e * d..(e + 1) * d];
-                    let out = &mut g.values[e * g.dim + offset..e * g.dim + offset + t.out_dim()];
-                    if t.history == 0 {
-                        out.copy_from_slice(row);
-                        continue;
-                    }
-                    let hist = &mut t.hist[e * d * t.history..(e + 1) * d * t.history];
-                    if std::mem::replace(&mut t.fresh[e], false) {
-                        hist.chunks_exact_mut(d)
-                            .for_each(|slot| slot.copy_from_slice(row));
-                    } else {
-                        hist.copy_within(d.., 0);
-                        let last = hist.len() - d;
-                        hist[last..].copy_from_slice(row);
-                    }
-                    out.copy_from_slice(hist);
+                if d == 0 {
+                    continue;
                 }
-                offset += t.out_dim();
+                let columns = offset..offset + width;
+                // Per env: its row, its group columns, its history and its noise stream, so
+                // the envs run in parallel with the same result.
+                let rows = t
+                    .buf
+                    .par_chunks_mut(d)
+                    .zip(g.values.par_chunks_mut(g.dim))
+                    .zip(noise.streams_mut().par_iter_mut())
+                    .with_min_len(MIN_ENVS_PER_TASK);
+                let (cfg, history) = ((t.noise, t.clip, t.scale), t.history);
+                if history == 0 {
+                    rows.for_each(|((row, out), rng)| {
+                        corrupt(cfg, rng, row);
+                        out[columns.clone()].copy_from_slice(row);
+                    });
+                } else {
+                    rows.zip(t.hist.par_chunks_mut(d * history))
+                        .zip(t.fresh.par_iter_mut())
+                        .for_each(|((((row, out), rng), hist), fresh)| {
+                            corrupt(cfg, rng, row);
+                            if std::mem::replace(fresh, false) {
+                                hist.chunks_exact_mut(d)
+                                    .for_each(|slot| slot.copy_from_slice(row));
+                            } else {
+                                hist.copy_within(d.., 0);
+                                let last = hist.len() - d;
+                                hist[last..].copy_from_slice(row);
+                            }
+                            out[columns.clone()].copy_from_slice(hist);
+                        });
+                }
+                offset += width;
             }
+        }
+    }
+}
+
+/// Adds a term's noise to one env's row, then clips and scales it (Isaac Lab's order).
+fn corrupt(
+    (noise, clip, scale): (Option<NoiseCfg>, Option<(f32, f32)>, Option<f32>),
+    rng: &mut EnvRng,
+    row: &mut [f32],
+) {
+    if noise.is_none() && clip.is_none() && scale.is_none() {
+        return;
+    }
+    for v in row {
+        *v += match noise {
+            Some(NoiseCfg::Uniform { n_min, n_max }) => rng.uniform_range(n_min, n_max),
+            Some(NoiseCfg::Gaussian { mean, std }) => mean + std * rng.normal(),
+            None => 0.0,
+        };
+        if let Some((lo, hi)) = clip {
+            *v = v.clamp(lo, hi);
+        }
+        if let Some(s) = scale {
+            *v *= s;
         }
     }
 }

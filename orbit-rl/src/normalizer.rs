@@ -1,9 +1,11 @@
 //! Running observation normalisation (RSL-RL's `EmpiricalNormalization`).
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// Columns whose statistics one pass over the rows accumulates (on the stack).
-const COLUMN_BLOCK: usize = 64;
+/// Rows per block of the parallel passes. Fixed (not derived from the number of threads), so
+/// that the statistics' summation order, and with it every bit of the result, is too.
+const ROW_BLOCK: usize = 2048;
 
 /// Normalises each observation dimension by running statistics: `(x − μ) / (σ + ε)` with
 /// `ε = 0.01`. In training, every batch of rows updates the statistics with the batch mean and
@@ -40,7 +42,9 @@ impl EmpiricalNormalizer {
     }
 
     /// Folds a batch of rows (`x.len() = rows · dim`) into the statistics, unless frozen.
-    /// Sums run in `f64` in row order, so the result does not depend on threads.
+    /// Rows are summed in `f64` in fixed blocks of [`ROW_BLOCK`] rows whose partial sums are
+    /// added in block order, so the result depends on neither the number of threads nor
+    /// their timing.
     pub fn update(&mut self, x: &[f32]) {
         let d = self.dim();
         let n = x.len() / d;
@@ -49,60 +53,86 @@ impl EmpiricalNormalizer {
         }
         self.count += n as u64;
         let rate = n as f64 / self.count as f64;
-        // Columns in blocks of COLUMN_BLOCK, each block in two row-order passes (sums, then
-        // squared deviations): the rows are read contiguously, and each column's sums keep
-        // the row order.
-        for first in (0..d).step_by(COLUMN_BLOCK) {
-            let width = COLUMN_BLOCK.min(d - first);
-            let mut sum = [0.0f64; COLUMN_BLOCK];
-            for row in x.chunks_exact(d) {
-                for (s, &v) in sum.iter_mut().zip(&row[first..first + width]) {
-                    *s += f64::from(v);
-                }
-            }
-            let batch_mean = sum.map(|s| s / n as f64);
-            let mut sq = [0.0f64; COLUMN_BLOCK];
-            for row in x.chunks_exact(d) {
-                for ((q, &v), &m) in sq
-                    .iter_mut()
-                    .zip(&row[first..first + width])
-                    .zip(&batch_mean)
-                {
-                    *q += (f64::from(v) - m).powi(2);
-                }
-            }
-            for k in 0..width {
-                let j = first + k;
-                let batch_var = sq[k] / n as f64;
-                let (mean, var) = (f64::from(self.mean[j]), f64::from(self.var[j]));
-                let delta = batch_mean[k] - mean;
-                let new_mean = mean + rate * delta;
-                let new_var = var + rate * (batch_var - var + delta * (batch_mean[k] - new_mean));
-                self.mean[j] = new_mean as f32;
-                self.var[j] = new_var as f32;
-            }
+        let batch_mean: Vec<f64> = column_sums(x, d, None)
+            .into_iter()
+            .map(|s| s / n as f64)
+            .collect();
+        let squares = column_sums(x, d, Some(&batch_mean));
+        for j in 0..d {
+            let batch_var = squares[j] / n as f64;
+            let (mean, var) = (f64::from(self.mean[j]), f64::from(self.var[j]));
+            let delta = batch_mean[j] - mean;
+            let new_mean = mean + rate * delta;
+            let new_var = var + rate * (batch_var - var + delta * (batch_mean[j] - new_mean));
+            self.mean[j] = new_mean as f32;
+            self.var[j] = new_var as f32;
         }
     }
 
-    /// Normalises rows in place.
+    /// The per-column divisors `σ + ε`.
+    fn divisors(&self) -> Vec<f32> {
+        self.var.iter().map(|v| v.sqrt() + self.eps).collect()
+    }
+
+    /// Normalises rows in place (on every core for large batches; each value independently).
     pub fn normalize(&self, x: &mut [f32]) {
-        let d = self.dim();
-        for row in x.chunks_exact_mut(d) {
-            for ((v, &m), &var) in row.iter_mut().zip(&self.mean).zip(&self.var) {
-                *v = (*v - m) / (var.sqrt() + self.eps);
+        let divisors = self.divisors();
+        self.for_rows(x, |row| {
+            for ((v, &m), &s) in row.iter_mut().zip(&self.mean).zip(&divisors) {
+                *v = (*v - m) / s;
             }
-        }
+        });
     }
 
     /// Inverts [`normalize`](Self::normalize) in place: `x·(σ + ε) + μ`.
     pub fn denormalize(&self, x: &mut [f32]) {
-        let d = self.dim();
-        for row in x.chunks_exact_mut(d) {
-            for ((v, &m), &var) in row.iter_mut().zip(&self.mean).zip(&self.var) {
-                *v = *v * (var.sqrt() + self.eps) + m;
+        let divisors = self.divisors();
+        self.for_rows(x, |row| {
+            for ((v, &m), &s) in row.iter_mut().zip(&self.mean).zip(&divisors) {
+                *v = *v * s + m;
             }
-        }
+        });
     }
+
+    /// Applies `f` to every row, blocks of [`ROW_BLOCK`] rows in parallel.
+    fn for_rows(&self, x: &mut [f32], f: impl Fn(&mut [f32]) + Sync) {
+        let d = self.dim();
+        x.par_chunks_mut(ROW_BLOCK * d)
+            .for_each(|block| block.chunks_exact_mut(d).for_each(&f));
+    }
+}
+
+/// Per-column sums over the rows of `x` (`d` columns) of the values, or with `center` of their
+/// squared deviations from it. Each block of [`ROW_BLOCK`] rows is summed in row order (in
+/// parallel over blocks), then the blocks' sums in block order, so the result is the same on
+/// any number of threads.
+fn column_sums(x: &[f32], d: usize, center: Option<&[f64]>) -> Vec<f64> {
+    let partial: Vec<Vec<f64>> = x
+        .par_chunks(ROW_BLOCK * d)
+        .map(|block| {
+            let mut sums = vec![0.0f64; d];
+            let rows = block.chunks_exact(d);
+            match center {
+                None => rows.for_each(|row| {
+                    for (s, &v) in sums.iter_mut().zip(row) {
+                        *s += f64::from(v);
+                    }
+                }),
+                Some(c) => rows.for_each(|row| {
+                    for ((s, &v), &c) in sums.iter_mut().zip(row).zip(c) {
+                        *s += (f64::from(v) - c).powi(2);
+                    }
+                }),
+            }
+            sums
+        })
+        .collect();
+    partial.into_iter().fold(vec![0.0; d], |mut total, sums| {
+        for (t, s) in total.iter_mut().zip(sums) {
+            *t += s;
+        }
+        total
+    })
 }
 
 #[cfg(test)]
@@ -130,6 +160,40 @@ mod tests {
         assert_eq!(n.count, 5);
         n.denormalize(&mut x);
         assert!((x[0] - (5.0 + 8f32.sqrt())).abs() < 1e-5 && (x[1] - m1).abs() < 1e-5);
+    }
+
+    /// The statistics of a batch spanning several row blocks are the same bits on one thread
+    /// and on four, and match the two-pass mean and variance of the data.
+    #[test]
+    fn statistics_do_not_depend_on_threads() {
+        let rows = 3 * ROW_BLOCK + 17;
+        let x: Vec<f32> = (0..rows * 2)
+            .map(|i| {
+                if i % 2 == 0 {
+                    (i % 97) as f32
+                } else {
+                    -0.5 * (i % 13) as f32
+                }
+            })
+            .collect();
+        let stats = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut n = EmpiricalNormalizer::new(2, u64::MAX);
+            pool.install(|| n.update(&x));
+            n
+        };
+        let (one, four) = (stats(1), stats(4));
+        assert_eq!(one, four);
+        for j in 0..2 {
+            let col: Vec<f64> = x.iter().skip(j).step_by(2).map(|&v| f64::from(v)).collect();
+            let mean = col.iter().sum::<f64>() / rows as f64;
+            let var = col.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / rows as f64;
+            assert!((f64::from(one.mean[j]) - mean).abs() < 1e-5 * mean.abs().max(1.0));
+            assert!((f64::from(one.var[j]) - var).abs() < 1e-5 * var);
+        }
     }
 
     /// Past `until` rows, updates leave the statistics unchanged.

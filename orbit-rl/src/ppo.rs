@@ -11,7 +11,9 @@ use std::path::Path;
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Int, Tensor, TensorData};
+use orbit_core::parallel::MIN_ENVS_PER_TASK;
 use orbit_core::rng::EnvRng;
+use rayon::prelude::*;
 
 use crate::cfg::{GradClip, PpoCfg, Schedule};
 use crate::model::ActorCritic;
@@ -177,19 +179,19 @@ impl Ppo {
         }
         let sigma = &self.sigma;
         let s = &mut self.storage;
-        for e in 0..n {
-            let row = e * na..(e + 1) * na;
-            let rng = &mut self.noise[e];
-            for ((a, &m), &sd) in actions[row.clone()]
-                .iter_mut()
-                .zip(&mu[row.clone()])
-                .zip(sigma)
-            {
-                *a = m + sd * rng.normal();
-            }
-            s.actions_log_prob[t * n + e] =
-                gaussian_log_prob(&actions[row.clone()], &mu[row], sigma);
-        }
+        // Each env draws from its own stream, so the envs run in parallel with the same result.
+        actions
+            .par_chunks_mut(na)
+            .zip(mu.par_chunks(na))
+            .zip(self.noise.par_iter_mut())
+            .zip(s.actions_log_prob[t * n..(t + 1) * n].par_iter_mut())
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .for_each(|(((a, m), rng), log_prob)| {
+                for ((a, &m), &sd) in a.iter_mut().zip(m).zip(sigma) {
+                    *a = m + sd * rng.normal();
+                }
+                *log_prob = gaussian_log_prob(a, m, sigma);
+            });
         RolloutStorage::rows(&mut s.obs, t, n, no).copy_from_slice(obs);
         RolloutStorage::rows(&mut s.critic_obs, t, n, nc).copy_from_slice(critic_obs);
         RolloutStorage::rows(&mut s.actions, t, n, na).copy_from_slice(actions);
@@ -662,6 +664,35 @@ mod tests {
         }
         let last: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
         p.compute_returns(&last);
+    }
+
+    /// Each env samples from its own stream, so the actions and their log-probabilities are
+    /// the same bits on one thread and on four (with enough envs for several parallel tasks),
+    /// and each log-probability is that of its own row.
+    #[test]
+    fn sampled_actions_do_not_depend_on_threads() {
+        let n = 4 * MIN_ENVS_PER_TASK + 3;
+        let sample = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut p = ppo(n, 1);
+                let obs: Vec<f32> = (0..n * 3).map(|i| (i % 11) as f32 * 0.1).collect();
+                let mut actions = vec![0.0; n * 2];
+                p.act(&obs, &obs, &mut actions).unwrap();
+                (actions, p.storage)
+            })
+        };
+        let (a1, s1) = sample(1);
+        let (a4, s4) = sample(4);
+        assert_eq!(a1, a4);
+        assert_eq!(s1.actions_log_prob, s4.actions_log_prob);
+        let e = n - 1;
+        let row = e * 2..e * 2 + 2;
+        let expected = gaussian_log_prob(&a1[row.clone()], &s1.mu[row], &s1.sigma);
+        assert_eq!(s1.actions_log_prob[e], expected);
     }
 
     /// Before any update the network is the sampling policy: the ratio is 1, so the surrogate

@@ -3,6 +3,7 @@
 
 use glam::{Quat, Vec3};
 use orbit_core::math::{Pose, rotation_distance};
+use orbit_core::parallel::MIN_ENVS_PER_TASK;
 use orbit_managers::mdp::command_pose;
 use orbit_managers::term::{RewardTerm, RewardTermDef, TermContext};
 use orbit_managers::{EnvError, EnvView};
@@ -112,19 +113,12 @@ impl Refs {
             only_at_end: p.only_at_end,
         })
     }
+}
 
-    fn frame(&self, env: &EnvView<'_>, e: usize, (link, offset): (usize, Pose)) -> Pose {
-        env.scene
-            .backend
-            .articulation(self.robot)
-            .frame_pose(e, link, &offset)
-    }
-
-    fn target(&self, env: &EnvView<'_>, e: usize) -> (Vec3, Quat) {
-        let (cmd, _) = env.commands.command(&self.command).expect("command exists");
-        let target = command_pose(&cmd[e * 7..(e + 1) * 7]);
-        (target.pos, target.rot)
-    }
+/// Target pose of env `e` from the 7-wide pose command rows `cmd`.
+fn target_pose(cmd: &[f32], e: usize) -> (Vec3, Quat) {
+    let target = command_pose(&cmd[e * 7..(e + 1) * 7]);
+    (target.pos, target.rot)
 }
 
 /// The quantity a box-pushing reward term computes.
@@ -154,35 +148,40 @@ struct BoxPushingTerm {
 
 impl RewardTerm for BoxPushingTerm {
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        // The batched views are looked up once, not per env.
         let objects = env.scene.backend.rigid_object(self.refs.object);
+        let arm = env.scene.backend.articulation(self.refs.robot);
+        let (cmd, _) = env
+            .commands
+            .command(&self.refs.command)
+            .expect("checked when the term was built");
         let processed = env.actions.processed(&self.refs.action);
         let down = Quat::from_xyzw(1.0, 0.0, 0.0, 0.0);
         let n = out.len();
-        let this = &*self;
+        let refs = &self.refs;
+        let quantity = self.quantity;
         // Envs are independent: computed in parallel, each by the same operations.
         out.par_iter_mut()
-            .with_min_len(PAR_MIN_ENVS)
+            .with_min_len(MIN_ENVS_PER_TASK)
             .enumerate()
             .for_each(|(e, o)| {
-                if this.refs.only_at_end && env.episode_length[e] < env.max_episode_length {
+                if refs.only_at_end && env.episode_length[e] < env.max_episode_length {
                     *o = 0.0;
                     return;
                 }
-                *o = match this.quantity {
+                let frame = |(link, offset): (usize, Pose)| arm.frame_pose(e, link, &offset);
+                *o = match quantity {
                     Quantity::RodTipDistance => {
-                        let tip = this.refs.frame(env, e, this.refs.rod_tip).pos;
+                        let tip = frame(refs.rod_tip).pos;
                         (objects.pos[e] - tip).length().clamp(0.05, 100.0)
                     }
-                    Quantity::GoalDistance => {
-                        (objects.pos[e] - this.refs.target(env, e).0).length()
-                    }
+                    Quantity::GoalDistance => (objects.pos[e] - target_pose(cmd, e).0).length(),
                     Quantity::GoalRotation => {
-                        rotation_distance(objects.quat[e], this.refs.target(env, e).1)
+                        rotation_distance(objects.quat[e], target_pose(cmd, e).1)
                             / std::f32::consts::PI
                     }
                     Quantity::RodInclination => {
-                        let phi =
-                            rotation_distance(this.refs.frame(env, e, this.refs.rod).rot, down);
+                        let phi = rotation_distance(frame(refs.rod).rot, down);
                         if phi > std::f32::consts::FRAC_PI_4 {
                             phi / std::f32::consts::PI
                         } else {
@@ -194,16 +193,15 @@ impl RewardTerm for BoxPushingTerm {
                         u[e * d..(e + 1) * d].iter().map(|x| x * x).sum()
                     }),
                     Quantity::JointSpeed => {
-                        let v = env.scene.backend.articulation(this.refs.robot).joint_vel;
-                        let d = v.len() / n;
-                        v[e * d..(e + 1) * d]
+                        let d = arm.joint_vel.len() / n;
+                        arm.joint_vel[e * d..(e + 1) * d]
                             .iter()
                             .map(|x| x * x)
                             .sum::<f32>()
                             .sqrt()
                     }
                     Quantity::SpatialBonus => {
-                        let (p, q) = this.refs.target(env, e);
+                        let (p, q) = target_pose(cmd, e);
                         let d = (objects.pos[e] - p).length();
                         let rho = rotation_distance(objects.quat[e], q) / std::f32::consts::PI;
                         if d < 0.1 {
@@ -218,9 +216,6 @@ impl RewardTerm for BoxPushingTerm {
             });
     }
 }
-
-/// Below this many envs a term runs on one thread (parallel overhead would dominate).
-const PAR_MIN_ENVS: usize = 512;
 
 fn term(ctx: &TermContext<'_>, quantity: Quantity) -> Result<Box<dyn RewardTerm>, EnvError> {
     Ok(Box::new(BoxPushingTerm {
@@ -273,19 +268,17 @@ struct JointLimitViolation {
 impl RewardTerm for JointLimitViolation {
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
         let v = env.scene.backend.articulation(self.robot);
-        let n = self.p.q_min.len();
-        for (e, o) in out.iter_mut().enumerate() {
-            let (q, qd) = (
-                &v.joint_pos[e * n..(e + 1) * n],
-                &v.joint_vel[e * n..(e + 1) * n],
-            );
-            let above: f32 = (0..n).map(|i| (q[i] - self.p.q_max[i]).max(0.0)).sum();
-            let below: f32 = (0..n).map(|i| (self.p.q_min[i] - q[i]).max(0.0)).sum();
-            let fast: f32 = (0..n)
-                .map(|i| (qd[i].abs() - self.p.qd_max[i]).max(0.0))
-                .sum();
-            *o = above + below + fast;
-        }
+        let (n, p) = (self.p.q_min.len(), &self.p);
+        out.par_iter_mut()
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .zip(v.joint_pos.par_chunks(n))
+            .zip(v.joint_vel.par_chunks(n))
+            .for_each(|((o, q), qd)| {
+                let above: f32 = (0..n).map(|i| (q[i] - p.q_max[i]).max(0.0)).sum();
+                let below: f32 = (0..n).map(|i| (p.q_min[i] - q[i]).max(0.0)).sum();
+                let fast: f32 = (0..n).map(|i| (qd[i].abs() - p.qd_max[i]).max(0.0)).sum();
+                *o = above + below + fast;
+            });
     }
 }
 

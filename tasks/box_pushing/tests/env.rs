@@ -588,3 +588,33 @@ fn mass_randomisation_changes_gravity_torques() {
     let err = make(TASK, &[bad.into()]).err().unwrap().to_string();
     assert!(err.contains("events.light") && err.contains("> 0"), "{err}");
 }
+
+/// Terms run over envs on every core, each env from its own rows and random stream: with
+/// enough envs for several parallel tasks, observations (with noise and history) and rewards
+/// are the same bits on one thread and on three.
+#[test]
+fn envs_in_parallel_give_the_same_bits_on_any_number_of_threads() {
+    let n = 2 * orbit_core::parallel::MIN_ENVS_PER_TASK + 5;
+    let noisy = "observations.policy.terms.q_hist=(func: \"joint_pos\", history_length: 2, noise: Some(Gaussian(mean: 0.0, std: 0.01)))";
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut env = env(n, &[noisy, "sim.num_threads=1"]);
+            env.reset().unwrap();
+            let act: Vec<f32> = (0..n * env.action_dim())
+                .map(|i| ((i % 13) as f32 - 6.0) * 0.05)
+                .collect();
+            let reward = env.step(&act).unwrap().reward.to_vec();
+            (reward, env.observation("policy").unwrap().0.to_vec())
+        })
+    };
+    let (r1, o1) = run(1);
+    let (r3, o3) = run(3);
+    assert_eq!(r1, r3);
+    assert_eq!(o1, o3);
+    let d = o1.len() / n;
+    assert_ne!(o1[..d], o1[d..2 * d], "envs draw different noise");
+}
