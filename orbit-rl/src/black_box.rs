@@ -593,4 +593,8 @@ impl VecEnv for BlackBoxEnv {
                 .into(),
         ))
     }
+
+    fn step_timings(&self) -> Option<orbit_managers::StepTimings> {
+        Some(*self.env.timings())
+    }
 }

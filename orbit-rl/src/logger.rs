@@ -90,6 +90,8 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
                 fps: 0.0,
                 collection_time: 0.0,
                 env_time: 0.0,
+                physics_time: 0.0,
+                policy_time: 0.0,
                 learning_time: 0.0,
                 episode: Default::default(),
             });
@@ -105,6 +107,8 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
             "Perf/total_fps" => log.fps = value,
             "Perf/collection_time" => log.collection_time = value,
             "Perf/env_time" => log.env_time = value,
+            "Perf/physics_time" => log.physics_time = value,
+            "Perf/policy_time" => log.policy_time = value,
             "Perf/learning_time" => log.learning_time = value,
             "Train/mean_reward" => log.mean_return = Some(v32),
             "Train/mean_episode_length" => log.mean_episode_length = Some(v32),
@@ -133,6 +137,8 @@ pub fn scalars(log: &IterationLog) -> Vec<(String, f64)> {
         ("Perf/total_fps".into(), log.fps),
         ("Perf/collection_time".into(), log.collection_time),
         ("Perf/env_time".into(), log.env_time),
+        ("Perf/physics_time".into(), log.physics_time),
+        ("Perf/policy_time".into(), log.policy_time),
         ("Perf/learning_time".into(), log.learning_time),
     ];
     let optional = [

@@ -53,6 +53,12 @@ pub struct IterationLog {
     /// Seconds of the collection spent inside the env's `step` (physics and managers); the
     /// rest is the policy's forward pass and the runner's bookkeeping.
     pub env_time: f64,
+    /// Seconds of `env_time` spent in the physics backend (stepping, and reading the state
+    /// back); 0 when the env does not report its phases.
+    pub physics_time: f64,
+    /// Seconds of the collection spent in the policy: its forward pass, the action sampling and
+    /// storing the transition.
+    pub policy_time: f64,
     /// Seconds spent learning.
     pub learning_time: f64,
     /// Per-key means of the env's episode logs over this iteration.
@@ -233,8 +239,12 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let mut episode: BTreeMap<String, (f64, usize)> = BTreeMap::new();
             let mut interactions = 0u64;
             let mut env_time = 0.0;
+            let mut policy_time = 0.0;
+            let physics_before = self.env.step_timings().map(|t| t.physics);
             for _ in 0..t_steps {
+                let policy_start = Instant::now();
                 self.alg.act(&self.obs, &self.critic_obs, &mut actions)?;
+                policy_time += policy_start.elapsed().as_secs_f64();
                 let env_start = Instant::now();
                 let step = self.env.step(&actions)?;
                 env_time += env_start.elapsed().as_secs_f64();
@@ -273,6 +283,10 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 self.observe(true)?;
             }
             self.alg.compute_returns(&self.critic_obs);
+            let physics_time = match (physics_before, self.env.step_timings()) {
+                (Some(before), Some(after)) => (after.physics - before).as_secs_f64(),
+                _ => 0.0,
+            };
             let collection_time = start.elapsed().as_secs_f64();
             let learn_start = Instant::now();
             let losses = self.alg.update()?;
@@ -295,6 +309,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 fps: interactions as f64 / (collection_time + learning_time),
                 collection_time,
                 env_time,
+                physics_time,
+                policy_time,
                 learning_time,
                 episode: episode
                     .into_iter()

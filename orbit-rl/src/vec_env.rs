@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use orbit_core::rng::EnvRng;
-use orbit_managers::ManagerBasedRlEnv;
+use orbit_managers::{ManagerBasedRlEnv, StepTimings};
 
 use crate::{RlError, streams};
 
@@ -46,6 +46,10 @@ pub trait VecEnv {
     /// Moves every env to a random step of its episode (uniform in `[0, max_episode_length)`),
     /// drawn from `seed`, so that time-outs spread out.
     fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError>;
+    /// Wall-clock time of each phase of the env's steps so far, if the env measures it.
+    fn step_timings(&self) -> Option<StepTimings> {
+        None
+    }
 }
 
 /// A boxed env is an env: lets one runner type train step-based and black-box envs.
@@ -84,6 +88,10 @@ impl<E: VecEnv + ?Sized> VecEnv for Box<E> {
 
     fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError> {
         (**self).randomize_episode_lengths(seed)
+    }
+
+    fn step_timings(&self) -> Option<StepTimings> {
+        (**self).step_timings()
     }
 }
 
@@ -188,5 +196,9 @@ impl VecEnv for RlVecEnv {
             .collect();
         self.env.set_episode_length(&lengths)?;
         Ok(())
+    }
+
+    fn step_timings(&self) -> Option<StepTimings> {
+        Some(*self.env.timings())
     }
 }

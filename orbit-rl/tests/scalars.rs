@@ -25,6 +25,8 @@ fn log(iteration: usize, success: Option<f32>) -> IterationLog {
         fps: 192_753.123_456,
         collection_time: 1.712_345,
         env_time: 0.25,
+        physics_time: 0.125,
+        policy_time: 0.062_5,
         learning_time: 0.412_5,
         episode: BTreeMap::from([
             ("Metrics/target/success".to_string(), 0.25),

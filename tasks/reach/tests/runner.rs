@@ -37,6 +37,8 @@ fn timeless(h: &IterationLog) -> IterationLog {
         fps: 0.0,
         collection_time: 0.0,
         env_time: 0.0,
+        physics_time: 0.0,
+        policy_time: 0.0,
         learning_time: 0.0,
         ..h.clone()
     }
