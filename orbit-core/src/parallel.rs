@@ -8,3 +8,13 @@
 /// Envs per parallel task (rayon's `with_min_len`): smaller tasks would cost more in scheduling
 /// than the per-env work they carry, and a small batch stays on one thread.
 pub const MIN_ENVS_PER_TASK: usize = 512;
+
+/// Runs `f` on a pool of its own with `threads` threads: every parallel loop inside it splits
+/// over that many. For checking that a result does not depend on the number of threads.
+pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool of that size can be built")
+        .install(f)
+}

@@ -177,12 +177,8 @@ mod tests {
             })
             .collect();
         let stats = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
             let mut n = EmpiricalNormalizer::new(2, u64::MAX);
-            pool.install(|| n.update(&x));
+            orbit_core::parallel::on_threads(threads, || n.update(&x));
             n
         };
         let (one, four) = (stats(1), stats(4));

@@ -673,11 +673,7 @@ mod tests {
     fn sampled_actions_do_not_depend_on_threads() {
         let n = 4 * MIN_ENVS_PER_TASK + 3;
         let sample = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            orbit_core::parallel::on_threads(threads, || {
                 let mut p = ppo(n, 1);
                 let obs: Vec<f32> = (0..n * 3).map(|i| (i % 11) as f32 * 0.1).collect();
                 let mut actions = vec![0.0; n * 2];

@@ -1,7 +1,7 @@
 //! Fancy Gym's box-pushing reward terms (spec §5.1), each returning the per-step quantity that
 //! the config weights: distances and angles are positive, penalties come from negative weights.
 
-use glam::{Quat, Vec3};
+use glam::Quat;
 use orbit_core::math::{Pose, rotation_distance};
 use orbit_core::parallel::MIN_ENVS_PER_TASK;
 use orbit_managers::mdp::command_pose;
@@ -116,9 +116,8 @@ impl Refs {
 }
 
 /// Target pose of env `e` from the 7-wide pose command rows `cmd`.
-fn target_pose(cmd: &[f32], e: usize) -> (Vec3, Quat) {
-    let target = command_pose(&cmd[e * 7..(e + 1) * 7]);
-    (target.pos, target.rot)
+fn target_pose(cmd: &[f32], e: usize) -> Pose {
+    command_pose(&cmd[e * 7..(e + 1) * 7])
 }
 
 /// The quantity a box-pushing reward term computes.
@@ -175,9 +174,9 @@ impl RewardTerm for BoxPushingTerm {
                         let tip = frame(refs.rod_tip).pos;
                         (objects.pos[e] - tip).length().clamp(0.05, 100.0)
                     }
-                    Quantity::GoalDistance => (objects.pos[e] - target_pose(cmd, e).0).length(),
+                    Quantity::GoalDistance => (objects.pos[e] - target_pose(cmd, e).pos).length(),
                     Quantity::GoalRotation => {
-                        rotation_distance(objects.quat[e], target_pose(cmd, e).1)
+                        rotation_distance(objects.quat[e], target_pose(cmd, e).rot)
                             / std::f32::consts::PI
                     }
                     Quantity::RodInclination => {
@@ -201,9 +200,10 @@ impl RewardTerm for BoxPushingTerm {
                             .sqrt()
                     }
                     Quantity::SpatialBonus => {
-                        let (p, q) = target_pose(cmd, e);
-                        let d = (objects.pos[e] - p).length();
-                        let rho = rotation_distance(objects.quat[e], q) / std::f32::consts::PI;
+                        let target = target_pose(cmd, e);
+                        let d = (objects.pos[e] - target.pos).length();
+                        let rho =
+                            rotation_distance(objects.quat[e], target.rot) / std::f32::consts::PI;
                         if d < 0.1 {
                             300.0
                                 + (-1050.0 * d).clamp(-100.0, 0.0)

@@ -597,11 +597,7 @@ fn envs_in_parallel_give_the_same_bits_on_any_number_of_threads() {
     let n = 2 * orbit_core::parallel::MIN_ENVS_PER_TASK + 5;
     let noisy = "observations.policy.terms.q_hist=(func: \"joint_pos\", history_length: 2, noise: Some(Gaussian(mean: 0.0, std: 0.01)))";
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        orbit_core::parallel::on_threads(threads, || {
             let mut env = env(n, &[noisy, "sim.num_threads=1"]);
             env.reset().unwrap();
             let act: Vec<f32> = (0..n * env.action_dim())
