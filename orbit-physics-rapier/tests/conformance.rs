@@ -51,3 +51,8 @@ fn franka_tracks_mujoco_rollouts() {
 fn deterministic_runs() {
     orbit_conformance::deterministic_runs(BACKEND_NAME);
 }
+
+#[test]
+fn resets_leave_other_envs_untouched() {
+    orbit_conformance::resets_leave_other_envs_untouched(BACKEND_NAME);
+}

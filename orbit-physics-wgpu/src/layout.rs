@@ -136,6 +136,28 @@ impl BufferLayout {
         }
     }
 
+    /// Every section of the state as `(first float, floats per env)`: env `e`'s row of a
+    /// section is `first + e · width .. first + (e + 1) · width`.
+    pub fn env_sections(&self) -> Vec<(usize, usize)> {
+        let mut sections = Vec::new();
+        for a in &self.articulations {
+            for k in 0..4 {
+                sections.push((a.joints + k * a.joint_len, a.dofs));
+            }
+            let (l3, l4) = (3 * a.links, 4 * a.links);
+            sections.extend([
+                (a.link_pos, l3),
+                (a.link_quat, l4),
+                (a.link_lin, l3),
+                (a.link_ang, l3),
+            ]);
+        }
+        for o in &self.objects {
+            sections.extend([(o.pos, 3), (o.quat, 4), (o.lin, 3), (o.ang, 3)]);
+        }
+        sections
+    }
+
     /// The `lay` table of env-count-dependent offsets the kernel reads: env count, the input
     /// offsets (mass scale, friction, fresh, compensation), then per dof the state base, section length and input base, per link the
     /// articulation's link block, per object its block (positions given by [`lay_constants`]).

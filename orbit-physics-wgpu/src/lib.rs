@@ -11,6 +11,7 @@
 
 mod codegen;
 mod compile;
+mod gather;
 mod gpu;
 mod layout;
 mod mirror;
@@ -31,6 +32,7 @@ pub use compile::{MAX_CONTACTS, MAX_DOFS, MAX_LINKS, default_solver_iterations};
 pub use gpu::{Gpu, gpu};
 
 use compile::CompiledScene;
+use gather::RowGather;
 use layout::BufferLayout;
 use mirror::HostMirror;
 
@@ -65,6 +67,10 @@ pub struct WgpuBackend {
     /// The host's copy of the state buffer, read back when first looked at after a dispatch
     /// (16-byte aligned for `Quat` views).
     state: HostMirror,
+    /// What the next refresh of `state` has to read.
+    stale: Stale,
+    /// Reads back the rows of a few envs.
+    gather: RowGather,
     /// The last dispatch, until the next one has been submitted and waits for it.
     pending: Option<wgpu::SubmissionIndex>,
     /// Receives the step kernel's two timestamps.
@@ -84,6 +90,14 @@ pub struct WgpuBackend {
     timer: Option<KernelTimer>,
     /// `timestamps` holds the kernel times of a dispatch that ran substeps.
     timed: bool,
+}
+
+/// The part of the host mirror that the dispatches since it was last current have changed.
+enum Stale {
+    /// Every env (a step ran, or a republish of all envs).
+    All,
+    /// Only these envs were republished (after a state write); every other row is current.
+    Envs(Vec<u32>),
 }
 
 /// Two GPU timestamps around the step kernel, resolved into a buffer that each step copies
@@ -205,6 +219,7 @@ impl WgpuBackend {
             })
         };
         let staging = readback("orbit readback", buffers.state_len * 4);
+        let gather = RowGather::new(&gpu, &buffers, &state_buf);
         let timestamps = readback("orbit step timestamps", 16);
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("orbit step"),
@@ -254,6 +269,8 @@ impl WgpuBackend {
             params_buf,
             staging,
             state: HostMirror::new(buffers.state_len.div_ceil(4)),
+            stale: Stale::All,
+            gather,
             pending: None,
             timestamps,
             inputs: vec![0.0; buffers.inputs_len],
@@ -306,6 +323,44 @@ impl WgpuBackend {
     /// buffer is queued here, when the state is looked at, not with every step: at 65 536
     /// envs it is tens of megabytes over the bus, as long as a quarter of the step's kernel.
     fn read_back(&self, dst: &mut [Vec4]) {
+        match &self.stale {
+            Stale::All => self.read_back_all(dst),
+            Stale::Envs(ids) => self.read_back_rows(ids, dst),
+        }
+    }
+
+    /// Copies the rows of `env_ids` (all that changed since `dst` was current) into `dst`.
+    fn read_back_rows(&self, env_ids: &[u32], dst: &mut [Vec4]) {
+        if env_ids.is_empty() {
+            return;
+        }
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("orbit gather"),
+            });
+        let bytes = self
+            .gather
+            .encode(&self.gpu, &mut encoder, env_ids, &self.staging);
+        self.gpu.queue.submit([encoder.finish()]);
+        let slice = self.staging.slice(..bytes.max(4));
+        self.map_read(&slice);
+        {
+            let view = slice
+                .get_mapped_range()
+                .unwrap_or_else(|e| panic!("reading the reset envs' state back failed: {e}"));
+            self.gather.scatter(
+                env_ids,
+                bytemuck::cast_slice(&view),
+                bytemuck::cast_slice_mut(dst),
+            );
+        }
+        self.staging.unmap();
+    }
+
+    /// Copies the whole published state into `dst`.
+    fn read_back_all(&self, dst: &mut [Vec4]) {
         let bytes = (self.buffers.state_len * 4) as u64;
         let mut encoder = self
             .gpu
@@ -444,9 +499,15 @@ impl WgpuBackend {
         self.dirty.push(start..start + len);
     }
 
-    /// Runs `substeps` substeps (0: only recompute what is published); the host mirror reads
-    /// the published state back when it is next looked at.
-    fn dispatch(&mut self, substeps: u32) -> Result<(), PhysicsError> {
+    /// Runs `substeps` substeps (0: only recompute what is published, for the envs flagged
+    /// fresh if `only_fresh` lists them, else for all); the host mirror reads the published
+    /// state back when it is next looked at.
+    fn dispatch(
+        &mut self,
+        substeps: u32,
+        only_fresh: Option<&[usize]>,
+    ) -> Result<(), PhysicsError> {
+        let only_fresh = only_fresh.filter(|_| substeps == 0);
         self.upload_inputs();
         // Steps (not republishes) are timed.
         let timer = self.timer.as_ref().filter(|_| substeps > 0);
@@ -455,7 +516,7 @@ impl WgpuBackend {
         queue.write_buffer(
             &self.params_buf,
             0,
-            bytemuck::cast_slice(&[substeps, 0u32, 0, 0]),
+            bytemuck::cast_slice(&[substeps, u32::from(only_fresh.is_some()), 0, 0]),
         );
         let device = &gpu.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -485,7 +546,7 @@ impl WgpuBackend {
         if timer.is_some() {
             self.timed = true;
         }
-        self.state.invalidate();
+        self.mark_stale(only_fresh);
         self.wait_for_pending()?;
         self.pending = Some(submitted);
         // Fresh flags apply to one dispatch.
@@ -497,17 +558,37 @@ impl WgpuBackend {
         Ok(())
     }
 
+    /// Records what a dispatch republishing `only` (or stepping all envs) makes stale.
+    fn mark_stale(&mut self, only: Option<&[usize]>) {
+        let previous = std::mem::replace(&mut self.stale, Stale::All);
+        let ids = only.map(|ids| ids.iter().map(|&e| e as u32));
+        let stale = match (ids, previous) {
+            (Some(ids), _) if self.state.is_current() => Stale::Envs(ids.collect()),
+            (Some(ids), Stale::Envs(mut earlier)) => {
+                earlier.extend(ids);
+                Stale::Envs(earlier)
+            }
+            _ => Stale::All,
+        };
+        self.stale = match stale {
+            Stale::Envs(ids) if self.gather.worthwhile(ids.len()) => Stale::Envs(ids),
+            _ => Stale::All,
+        };
+        self.state.invalidate();
+    }
+
     /// Marks every env fresh and republishes (after construction).
     fn refresh_all(&mut self) -> Result<(), PhysicsError> {
         let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
         self.inputs[fresh..fresh + n].fill(1.0);
         self.mark(fresh, n);
         self.fresh_pending = true;
-        self.dispatch(0)
+        self.dispatch(0, None)
     }
 
     /// After a state write to `sections` (see [`upload_state_rows`](Self::upload_state_rows)):
-    /// upload those rows, drop the warm starts of the envs and republish.
+    /// upload those rows, drop the warm starts of the envs and republish them (only them, so
+    /// that only their rows are read back and every other env's state stays as it was).
     fn after_write(
         &mut self,
         env_ids: &[usize],
@@ -520,7 +601,7 @@ impl WgpuBackend {
         self.mark(fresh, self.buffers.num_envs);
         self.fresh_pending = true;
         self.upload_state_rows(env_ids, sections);
-        self.dispatch(0)
+        self.dispatch(0, Some(env_ids))
     }
 
     fn check_articulation(&self, a: usize) -> Result<layout::ArticulationOffsets, PhysicsError> {
@@ -614,13 +695,14 @@ impl PhysicsBackend for WgpuBackend {
     }
 
     fn device_memory_bytes(&self) -> usize {
-        // State, inputs, warm starts, the readback copy and the layout table.
+        // State, inputs, warm starts, the readback copy, the layout table and the gather's.
         let b = &self.buffers;
         4 * (2 * b.state_len + b.inputs_len + b.warm_len + self.lay_len)
+            + self.gather.device_memory_bytes()
     }
 
     fn step(&mut self) -> Result<(), PhysicsError> {
-        self.dispatch(1)
+        self.dispatch(1, None)
     }
 
     fn step_n(&mut self, n: usize) -> Result<(), PhysicsError> {
@@ -629,7 +711,7 @@ impl PhysicsBackend for WgpuBackend {
         }
         let n = u32::try_from(n)
             .map_err(|_| PhysicsError::InvalidInput(format!("{n} steps in one call")))?;
-        self.dispatch(n)
+        self.dispatch(n, None)
     }
 
     fn articulation(&self, a: usize) -> ArticulationView<'_> {
@@ -757,7 +839,7 @@ impl PhysicsBackend for WgpuBackend {
         }
         self.mark(self.buffers.mass_scale, self.buffers.num_envs * bodies);
         // Bias forces depend on the masses: republish.
-        self.dispatch(0)
+        self.dispatch(0, None)
     }
 
     fn set_friction(
@@ -800,5 +882,47 @@ pub fn gpu_available_for_tests() -> bool {
             eprintln!("SKIPPED: no Vulkan adapter for the wgpu backend: {e}");
             false
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// After a reset of a few envs the host mirror reads back only their rows; it must then
+    /// hold exactly what a read of the whole state gives, in every section.
+    #[test]
+    fn reading_back_the_reset_rows_gives_the_whole_state() {
+        if !gpu_available_for_tests() {
+            return;
+        }
+        let scene = orbit_assets::box_pushing_scene(&[]).expect("bundled scene");
+        let n = 64;
+        let mut b = WgpuBackend::new(&scene, n, &SimCfg::default()).expect("backend");
+        let efforts: Vec<f32> = (0..n * 7).map(|i| ((i % 13) as f32 - 6.0) * 0.5).collect();
+        b.set_joint_efforts(0, &efforts).unwrap();
+        b.step_n(10).unwrap();
+        b.sync();
+        let ids = [3, 17, 40, 41, 63];
+        let pos: Vec<f32> = (0..ids.len() * 7).map(|i| 0.01 * i as f32).collect();
+        b.write_joint_state(0, &ids, &pos, &vec![0.1; ids.len() * 7])
+            .unwrap();
+        let mut root = RootState::default();
+        root.pose.pos = Vec3::new(0.4, 0.1, 0.3);
+        b.write_root_state(0, &ids[1..3], &[root; 2]).unwrap();
+        assert!(
+            matches!(&b.stale, Stale::Envs(e) if e.len() == 2),
+            "only the written envs are stale"
+        );
+        let gathered: Vec<u32> = b.state_f32().iter().map(|x| x.to_bits()).collect();
+        let mut whole = vec![Vec4::ZERO; b.buffers.state_len.div_ceil(4)];
+        b.read_back_all(&mut whole);
+        let whole: Vec<u32> = bytemuck::cast_slice::<Vec4, f32>(&whole)
+            .iter()
+            .map(|x| x.to_bits())
+            .collect();
+        assert_eq!(gathered, whole);
+        assert_eq!(b.articulation(0).joint_pos[17 * 7 + 3], pos[7 + 3]);
+        assert_eq!(b.rigid_object(0).pos[40], root.pose.pos);
     }
 }

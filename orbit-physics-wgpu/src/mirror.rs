@@ -47,6 +47,11 @@ impl HostMirror {
         self.data.get_mut()
     }
 
+    /// Whether the data is current (no refresh pending).
+    pub fn is_current(&self) -> bool {
+        self.current.get().is_some()
+    }
+
     /// The GPU state changed: the next reader refreshes.
     pub fn invalidate(&mut self) {
         self.current = OnceLock::new();

@@ -21,7 +21,9 @@
 
 struct Params {
     substeps: u32,
-    pad0: u32,
+    // With no substeps: 1 to publish only the envs flagged fresh (the others keep their
+    // published state untouched), 0 to publish every env.
+    only_fresh: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -1082,6 +1084,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     env = gid.x;
     num_envs = lay[LAY_NUM_ENVS];
     if env >= num_envs {
+        return;
+    }
+    if params.substeps == 0u && params.only_fresh != 0u && inp[lay[LAY_IN_FRESH] + env] == 0.0 {
         return;
     }
     load_state();

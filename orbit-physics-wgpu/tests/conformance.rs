@@ -67,6 +67,13 @@ fn deterministic_runs() {
     }
 }
 
+#[test]
+fn resets_leave_other_envs_untouched() {
+    if gpu_available() {
+        orbit_conformance::resets_leave_other_envs_untouched(BACKEND_NAME);
+    }
+}
+
 /// MuJoCo agreement under Fancy Gym's torque law, with the rapier backend's tolerances: every
 /// case within 0.005 rad joint RMS before the rod first pushes the box, the ProMP cases within
 /// 0.02 rad over the whole episode (docs/fidelity.md).
