@@ -18,3 +18,37 @@ pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
         .expect("a thread pool of that size can be built")
         .install(f)
 }
+
+/// Values per parallel task for element-wise scans of a batch (a few nanoseconds each).
+const MIN_VALUES_PER_TASK: usize = 1 << 14;
+
+/// The index of the first value that is NaN or infinite, scanned on every core; the same
+/// index a sequential scan finds.
+pub fn first_non_finite(values: &[f32]) -> Option<usize> {
+    use rayon::prelude::*;
+    values
+        .par_iter()
+        .with_min_len(MIN_VALUES_PER_TASK)
+        .position_first(|v| !v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn first_non_finite_is_the_first_on_any_number_of_threads() {
+        let mut values = vec![1.0f32; 5 * MIN_VALUES_PER_TASK + 3];
+        assert_eq!(first_non_finite(&values), None);
+        values[4 * MIN_VALUES_PER_TASK + 1] = f32::INFINITY;
+        values[3 * MIN_VALUES_PER_TASK + 7] = f32::NAN;
+        for threads in [1, 3] {
+            let found = on_threads(threads, || first_non_finite(&values));
+            assert_eq!(
+                found,
+                Some(3 * MIN_VALUES_PER_TASK + 7),
+                "{threads} threads"
+            );
+        }
+    }
+}

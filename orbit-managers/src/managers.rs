@@ -101,7 +101,7 @@ impl ActionManager {
                 actions.len()
             )));
         }
-        if let Some(i) = actions.iter().position(|a| !a.is_finite()) {
+        if let Some(i) = orbit_core::parallel::first_non_finite(actions) {
             return Err(EnvError::InvalidAction(format!(
                 "value {} of env {} (action index {}) is not finite; nothing was applied",
                 actions[i],
@@ -114,11 +114,12 @@ impl ActionManager {
         let mut offset = 0;
         for (_, term) in &mut self.terms {
             let d = term.dim();
-            self.scratch.clear();
-            for e in 0..n {
-                self.scratch
-                    .extend_from_slice(&actions[e * self.dim + offset..e * self.dim + offset + d]);
-            }
+            self.scratch.resize(n * d, 0.0);
+            self.scratch
+                .par_chunks_mut(d)
+                .with_min_len(MIN_ENVS_PER_TASK)
+                .zip(actions.par_chunks(self.dim))
+                .for_each(|(to, from)| to.copy_from_slice(&from[offset..offset + d]));
             term.process(scene, &self.scratch);
             offset += d;
         }

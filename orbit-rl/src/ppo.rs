@@ -11,7 +11,7 @@ use std::path::Path;
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Int, Tensor, TensorData};
-use orbit_core::parallel::MIN_ENVS_PER_TASK;
+use orbit_core::parallel::{MIN_ENVS_PER_TASK, first_non_finite};
 use orbit_core::rng::EnvRng;
 use rayon::prelude::*;
 
@@ -174,7 +174,7 @@ impl Ppo {
         if let Some(normalizer) = &self.value_normalizer {
             normalizer.denormalize(&mut value);
         }
-        if mu.iter().chain(&value).any(|v| !v.is_finite()) {
+        if [&mu, &value].iter().any(|v| first_non_finite(v).is_some()) {
             return Err(RlError::NonFinite("the policy's output".into()));
         }
         let sigma = &self.sigma;

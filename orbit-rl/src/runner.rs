@@ -415,7 +415,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
 /// An error naming the env (and, for rows wider than 1, the entry) of the first non-finite
 /// value in `values` (`[num_envs × dim]`).
 fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
-    let Some(i) = values.iter().position(|v| !v.is_finite()) else {
+    let Some(i) = orbit_core::parallel::first_non_finite(values) else {
         return Ok(());
     };
     let entry = if dim > 1 {

@@ -312,7 +312,7 @@ pub fn check_batch(
             values.len()
         )));
     }
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+    if let Some(i) = crate::parallel::first_non_finite(values) {
         return Err(PhysicsError::InvalidInput(format!(
             "{what}: value {} at row {} column {} is not finite",
             values[i],

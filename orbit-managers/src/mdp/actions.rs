@@ -1,5 +1,7 @@
 //! Action terms: joint position and joint effort.
 use super::*;
+use orbit_core::parallel::MIN_ENVS_PER_TASK;
+use rayon::prelude::*;
 
 /// Parameters of joint actions: `processed = raw · scale + offset`.
 #[derive(Clone, Debug, Deserialize)]
@@ -73,14 +75,20 @@ impl ActionTerm for JointAction {
     }
 
     fn process(&mut self, _scene: &Scene, raw: &[f32]) {
-        let d = self.dim();
-        for (i, (out, &a)) in self.processed.iter_mut().zip(raw).enumerate() {
-            let a = match self.p.clip {
-                Some((lo, hi)) => a.clamp(lo, hi),
-                None => a,
-            };
-            *out = a * self.p.scale + self.offsets[i % d];
-        }
+        let (d, p, offsets) = (self.dim(), &self.p, &self.offsets);
+        self.processed
+            .par_chunks_mut(d)
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .zip(raw.par_chunks(d))
+            .for_each(|(out, raw)| {
+                for ((o, &a), &offset) in out.iter_mut().zip(raw).zip(offsets) {
+                    let a = match p.clip {
+                        Some((lo, hi)) => a.clamp(lo, hi),
+                        None => a,
+                    };
+                    *o = a * p.scale + offset;
+                }
+            });
     }
 
     fn apply(&mut self, scene: &mut Scene) -> Result<(), EnvError> {
@@ -91,20 +99,27 @@ impl ActionTerm for JointAction {
         let (n, d) = (self.sel.num_dofs, self.dim());
         let view = scene.backend.articulation(self.sel.articulation);
         let own_bias = self.p.compensate_bias && !self.backend_compensation;
-        for e in 0..scene.num_envs() {
-            for (k, &j) in self.sel.dofs.iter().enumerate() {
-                let mut v = self.processed[e * d + k];
-                if self.kind == JointActionKind::Effort && !self.backend_compensation {
-                    if own_bias {
-                        v += view.bias_forces[e * n + j];
+        let host_effort = self.kind == JointActionKind::Effort && !self.backend_compensation;
+        let (dofs, effort_clip) = (&self.sel.dofs, &self.p.effort_clip);
+        self.full
+            .par_chunks_mut(n)
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .zip(self.processed.par_chunks(d))
+            .zip(view.bias_forces.par_chunks(n))
+            .for_each(|((full, processed), bias)| {
+                for (k, &j) in dofs.iter().enumerate() {
+                    let mut v = processed[k];
+                    if host_effort {
+                        if own_bias {
+                            v += bias[j];
+                        }
+                        if let Some(lim) = effort_clip {
+                            v = v.clamp(-lim[k], lim[k]);
+                        }
                     }
-                    if let Some(lim) = &self.p.effort_clip {
-                        v = v.clamp(-lim[k], lim[k]);
-                    }
+                    full[j] = v;
                 }
-                self.full[e * n + j] = v;
-            }
-        }
+            });
         let a = self.sel.articulation;
         match self.kind {
             JointActionKind::Position => scene.backend.set_joint_position_targets(a, &self.full)?,

@@ -2,7 +2,9 @@
 
 use glam::{EulerRot, Quat, Vec3};
 use orbit_core::math::{Pose, quat_wxyz, rotation_distance, to_wxyz};
+use orbit_core::parallel::MIN_ENVS_PER_TASK;
 use orbit_core::scene::{Geometry, Marker, MarkerShape};
+use rayon::prelude::*;
 use serde::Deserialize;
 
 use crate::base_env::EnvRngs;
@@ -93,13 +95,20 @@ impl CommandTerm for UniformPose {
 
     fn update_metrics(&mut self, scene: &Scene) {
         let a = scene.backend.articulation(self.robot);
-        for e in 0..scene.num_envs() {
-            let target =
-                command_pose_in_world(&a.link_pose(e, 0), &self.command[e * 7..(e + 1) * 7]);
-            let body = a.frame_pose(e, self.frame.0, &self.frame.1);
-            self.metrics[0].1[e] = (body.pos - target.pos).length();
-            self.metrics[1].1[e] = rotation_distance(body.rot, target.rot);
-        }
+        let [(_, distance), (_, angle)] = &mut self.metrics;
+        let frame = &self.frame;
+        distance
+            .par_iter_mut()
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .zip(angle.par_iter_mut())
+            .zip(self.command.par_chunks(7))
+            .enumerate()
+            .for_each(|(e, ((d, rho), c))| {
+                let target = command_pose_in_world(&a.link_pose(e, 0), c);
+                let body = a.frame_pose(e, frame.0, &frame.1);
+                *d = (body.pos - target.pos).length();
+                *rho = rotation_distance(body.rot, target.rot);
+            });
     }
 
     fn metrics(&self) -> &[(&'static str, Vec<f32>)] {

@@ -1,10 +1,12 @@
 //! The target-pose command: Fancy Gym's `sample_context` with its minimum-distance rule.
 
 use orbit_core::math::{quat_wxyz, rotation_distance};
+use orbit_core::parallel::MIN_ENVS_PER_TASK;
 use orbit_core::scene::{Marker, MarkerShape};
 use orbit_managers::mdp::command_pose;
 use orbit_managers::term::{CommandTerm, CommandTermDef, TermContext};
 use orbit_managers::{EnvError, EnvRngs, Scene};
+use rayon::prelude::*;
 use serde::Deserialize;
 
 /// Parameters of `box_target_pose`.
@@ -71,15 +73,20 @@ impl CommandTerm for TargetPose {
 
     fn update_metrics(&mut self, scene: &Scene) {
         let objects = scene.backend.rigid_object(self.object);
-        for e in 0..objects.pos.len() {
-            let c = &self.command[e * 7..(e + 1) * 7];
-            let d = (objects.pos[e] - glam::Vec3::new(c[0], c[1], c[2])).length();
-            let rho = rotation_distance(objects.quat[e], quat_wxyz([c[3], c[4], c[5], c[6]]));
-            self.metrics[0].1[e] = d;
-            self.metrics[1].1[e] = rho;
-            self.metrics[2].1[e] =
-                f32::from(u8::from(d <= SUCCESS_DISTANCE && rho <= SUCCESS_ANGLE));
-        }
+        let [(_, distance), (_, angle), (_, success)] = &mut self.metrics;
+        // Envs are independent: computed in parallel, each by the same operations.
+        distance
+            .par_iter_mut()
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .zip(angle.par_iter_mut())
+            .zip(success.par_iter_mut())
+            .zip(self.command.par_chunks(7))
+            .enumerate()
+            .for_each(|(e, (((d, rho), ok), c))| {
+                *d = (objects.pos[e] - glam::Vec3::new(c[0], c[1], c[2])).length();
+                *rho = rotation_distance(objects.quat[e], quat_wxyz([c[3], c[4], c[5], c[6]]));
+                *ok = f32::from(u8::from(*d <= SUCCESS_DISTANCE && *rho <= SUCCESS_ANGLE));
+            });
     }
 
     fn metrics(&self) -> &[(&'static str, Vec<f32>)] {
