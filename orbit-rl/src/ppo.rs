@@ -54,6 +54,10 @@ pub struct Ppo {
     noise: Vec<EnvRng>,
     /// A gradient-free copy of the model used while collecting a rollout.
     rollout_model: Option<ActorCritic>,
+    /// The actor and critic observations of each stored step, as the tensors the forward pass
+    /// took (already on the device: the update concatenates them instead of uploading the
+    /// rollout's observations again).
+    step_obs: Vec<(Tensor<2>, Tensor<2>)>,
     /// The action standard deviation during the current rollout.
     sigma: Vec<f32>,
     updates: u32,
@@ -121,6 +125,7 @@ impl Ppo {
             seed,
             noise,
             rollout_model: None,
+            step_obs: Vec::with_capacity(num_steps),
             sigma: Vec::new(),
             updates: 0,
         }
@@ -156,15 +161,20 @@ impl Ppo {
             "act called more often than num_steps_per_env"
         );
         let device = self.device.clone();
+        let inputs = (
+            tensor2(obs.to_vec(), n, no, &device),
+            tensor2(critic_obs.to_vec(), n, nc, &device),
+        );
         let model = self.rollout_model();
         // Means and values come back in one read (each read waits for the device).
         let out = values(Tensor::cat(
             vec![
-                model.action_mean(tensor2(obs.to_vec(), n, no, &device)),
-                model.value(tensor2(critic_obs.to_vec(), n, nc, &device)),
+                model.action_mean(inputs.0.clone()),
+                model.value(inputs.1.clone()),
             ],
             1,
         ));
+        self.step_obs.push(inputs);
         let mut mu = Vec::with_capacity(n * na);
         let mut value = Vec::with_capacity(n);
         for row in out.chunks_exact(na + 1) {
@@ -192,8 +202,6 @@ impl Ppo {
                 }
                 *log_prob = gaussian_log_prob(a, m, sigma);
             });
-        RolloutStorage::rows(&mut s.obs, t, n, no).copy_from_slice(obs);
-        RolloutStorage::rows(&mut s.critic_obs, t, n, nc).copy_from_slice(critic_obs);
         RolloutStorage::rows(&mut s.actions, t, n, na).copy_from_slice(actions);
         RolloutStorage::rows(&mut s.mu, t, n, na).copy_from_slice(&mu);
         RolloutStorage::rows(&mut s.values, t, n, 1).copy_from_slice(&value);
@@ -268,6 +276,7 @@ impl Ppo {
         let mut totals = LossStats::default();
         let rollout = Minibatch::upload(
             &self.storage,
+            std::mem::take(&mut self.step_obs),
             &perm,
             m,
             cfg.normalize_advantage_per_mini_batch,
@@ -554,17 +563,25 @@ struct Minibatch {
 }
 
 impl Minibatch {
-    /// Uploads the storage. With `per_minibatch` the advantages are normalised within each
-    /// minibatch of `perm` (chunks of `m`): the permutation is the same in every epoch, so
-    /// this is done once, here.
+    /// Uploads the storage, with the observations of its steps given as tensors (`step_obs`,
+    /// actor and critic, one pair per step). With `per_minibatch` the advantages are
+    /// normalised within each minibatch of `perm` (chunks of `m`): the permutation is the same
+    /// in every epoch, so this is done once, here.
     fn upload(
         s: &RolloutStorage,
+        step_obs: Vec<(Tensor<2>, Tensor<2>)>,
         perm: &[usize],
         m: usize,
         per_minibatch: bool,
         device: &Device,
     ) -> Self {
         let b = s.batch_size();
+        assert_eq!(
+            step_obs.len(),
+            s.num_steps,
+            "the update needs the observations of every step"
+        );
+        let (obs, critic_obs): (Vec<_>, Vec<_>) = step_obs.into_iter().unzip();
         let mut advantages = s.advantages.clone();
         if per_minibatch {
             for chunk in perm.chunks_exact(m) {
@@ -576,8 +593,8 @@ impl Minibatch {
             }
         }
         Self {
-            obs: tensor2(s.obs.clone(), b, s.num_obs, device),
-            critic_obs: tensor2(s.critic_obs.clone(), b, s.num_critic_obs, device),
+            obs: Tensor::cat(obs, 0),
+            critic_obs: Tensor::cat(critic_obs, 0),
             actions: tensor2(s.actions.clone(), b, s.num_actions, device),
             mu: tensor2(s.mu.clone(), b, s.num_actions, device),
             log_prob: tensor1(s.actions_log_prob.clone(), device),
@@ -648,22 +665,34 @@ mod tests {
     /// The whole rollout as one minibatch.
     fn whole_rollout(p: &Ppo) -> Minibatch {
         let all: Vec<usize> = (0..p.storage.batch_size()).collect();
-        Minibatch::upload(&p.storage, &all, all.len(), false, &p.device).select(&all, &p.device)
+        Minibatch::upload(
+            &p.storage,
+            p.step_obs.clone(),
+            &all,
+            all.len(),
+            false,
+            &p.device,
+        )
+        .select(&all, &p.device)
     }
 
-    /// Fills the storage with a rollout on synthetic observations and rewards.
-    fn rollout(p: &mut Ppo) {
+    /// Fills the storage with a rollout on synthetic observations and rewards; returns the
+    /// observations, step after step.
+    fn rollout(p: &mut Ppo) -> Vec<f32> {
         let (n, t) = (p.storage.num_envs, p.storage.num_steps);
         let mut rng = EnvRng::new(1, 0, 99);
         let mut actions = vec![0.0; n * 2];
+        let mut all_obs = Vec::new();
         for _ in 0..t {
             let obs: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
             p.act(&obs, &obs, &mut actions).unwrap();
+            all_obs.extend_from_slice(&obs);
             let rewards: Vec<f32> = actions.chunks(2).map(|a| -a[0] * a[0]).collect();
             p.process_env_step(&rewards, &vec![false; n], &vec![false; n]);
         }
         let last: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
         p.compute_returns(&last);
+        all_obs
     }
 
     /// Each env samples from its own stream, so the actions and their log-probabilities are
@@ -714,14 +743,14 @@ mod tests {
     #[test]
     fn minibatches_select_their_rows_and_normalise_their_advantages() {
         let mut p = ppo(16, 4);
-        rollout(&mut p);
+        let all_obs = rollout(&mut p);
         let perm: Vec<usize> = (0..64).map(|i| (i * 37) % 64).collect();
-        let r = Minibatch::upload(&p.storage, &perm, 16, true, &p.device);
+        let r = Minibatch::upload(&p.storage, p.step_obs.clone(), &perm, 16, true, &p.device);
         for chunk in perm.chunks_exact(16) {
             let mb = r.select(chunk, &p.device);
             let obs = values(mb.obs);
             for (row, &i) in chunk.iter().enumerate() {
-                assert_eq!(obs[row * 3..row * 3 + 3], p.storage.obs[i * 3..i * 3 + 3]);
+                assert_eq!(obs[row * 3..row * 3 + 3], all_obs[i * 3..i * 3 + 3]);
             }
             let a = values(mb.advantages);
             let mean = a.iter().sum::<f32>() / 16.0;

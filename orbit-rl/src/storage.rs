@@ -13,10 +13,6 @@ pub struct RolloutStorage {
     pub num_critic_obs: usize,
     /// Action width.
     pub num_actions: usize,
-    /// Actor observations the actions were taken from.
-    pub obs: Vec<f32>,
-    /// Critic observations of the same states.
-    pub critic_obs: Vec<f32>,
     /// Sampled actions.
     pub actions: Vec<f32>,
     /// Rewards (with the time-out bootstrap added).
@@ -40,7 +36,8 @@ pub struct RolloutStorage {
 }
 
 impl RolloutStorage {
-    /// The largest magnitudes in the rollout (observations, rewards, returns, action means)
+    /// The largest magnitudes in the rollout (rewards, returns, action means; the runner has
+    /// checked that the observations are finite)
     /// and the smallest noise std, for diagnosing a diverged update.
     pub fn extremes(&self) -> String {
         // NaN wins (f32::max would drop it).
@@ -55,9 +52,8 @@ impl RolloutStorage {
         };
         let min_sigma = self.sigma.iter().fold(f32::INFINITY, |m, &x| m.min(x));
         format!(
-            "max |obs| {:.3e}, max |reward| {:.3e}, max |return| {:.3e}, max |mean action| \
-             {:.3e}, min σ {min_sigma:.3e}",
-            max_abs(&self.obs),
+            "max |reward| {:.3e}, max |return| {:.3e}, max |mean action| {:.3e}, min σ \
+             {min_sigma:.3e}",
             max_abs(&self.rewards),
             max_abs(&self.returns),
             max_abs(&self.mu)
@@ -79,8 +75,6 @@ impl RolloutStorage {
             num_obs,
             num_critic_obs,
             num_actions,
-            obs: vec![0.0; b * num_obs],
-            critic_obs: vec![0.0; b * num_critic_obs],
             actions: vec![0.0; b * num_actions],
             rewards: vec![0.0; b],
             dones: vec![0.0; b],
