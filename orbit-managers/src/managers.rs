@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use orbit_core::config::{Node, node_at};
-use orbit_core::parallel::MIN_ENVS_PER_TASK;
+use orbit_core::parallel::{MIN_ENVS_PER_COPY_TASK, MIN_ENVS_PER_TASK};
 use orbit_core::rng::EnvRng;
 use rayon::prelude::*;
 
@@ -117,7 +117,7 @@ impl ActionManager {
             self.scratch.resize(n * d, 0.0);
             self.scratch
                 .par_chunks_mut(d)
-                .with_min_len(MIN_ENVS_PER_TASK)
+                .with_min_len(MIN_ENVS_PER_COPY_TASK)
                 .zip(actions.par_chunks(self.dim))
                 .for_each(|(to, from)| to.copy_from_slice(&from[offset..offset + d]));
             term.process(scene, &self.scratch);

@@ -1,6 +1,6 @@
 //! Action terms: joint position and joint effort.
 use super::*;
-use orbit_core::parallel::MIN_ENVS_PER_TASK;
+use orbit_core::parallel::MIN_ENVS_PER_COPY_TASK;
 use rayon::prelude::*;
 
 /// Parameters of joint actions: `processed = raw · scale + offset`.
@@ -78,7 +78,7 @@ impl ActionTerm for JointAction {
         let (d, p, offsets) = (self.dim(), &self.p, &self.offsets);
         self.processed
             .par_chunks_mut(d)
-            .with_min_len(MIN_ENVS_PER_TASK)
+            .with_min_len(MIN_ENVS_PER_COPY_TASK)
             .zip(raw.par_chunks(d))
             .for_each(|(out, raw)| {
                 for ((o, &a), &offset) in out.iter_mut().zip(raw).zip(offsets) {
@@ -103,7 +103,7 @@ impl ActionTerm for JointAction {
         let (dofs, effort_clip) = (&self.sel.dofs, &self.p.effort_clip);
         self.full
             .par_chunks_mut(n)
-            .with_min_len(MIN_ENVS_PER_TASK)
+            .with_min_len(MIN_ENVS_PER_COPY_TASK)
             .zip(self.processed.par_chunks(d))
             .zip(view.bias_forces.par_chunks(n))
             .for_each(|((full, processed), bias)| {
