@@ -161,10 +161,14 @@ impl Ppo {
             "act called more often than num_steps_per_env"
         );
         let device = self.device.clone();
-        let inputs = (
-            tensor2(obs.to_vec(), n, no, &device),
-            tensor2(critic_obs.to_vec(), n, nc, &device),
-        );
+        let actor_input = tensor2(obs.to_vec(), n, no, &device);
+        // The same values (an env without a `critic` group): uploaded once.
+        let critic_input = if std::ptr::eq(obs, critic_obs) {
+            actor_input.clone()
+        } else {
+            tensor2(critic_obs.to_vec(), n, nc, &device)
+        };
+        let inputs = (actor_input, critic_input);
         let model = self.rollout_model();
         // Means and values come back in one read (each read waits for the device).
         let out = values(Tensor::cat(

@@ -107,6 +107,10 @@ pub struct OnPolicyRunner<E: VecEnv> {
     /// The current (normalised) observations of the actor and the critic.
     obs: Vec<f32>,
     critic_obs: Vec<f32>,
+    /// The env's critic observations are its actor observations (no `critic` group): the
+    /// critic then reads `obs`, normalised by the actor's statistics, which are the critic
+    /// normaliser's too (the same values folded in the same order), and `critic_obs` is unused.
+    critic_is_actor: bool,
     log_dir: Option<PathBuf>,
     scalars: Option<ScalarLog>,
     /// Iterations done (the next iteration's index).
@@ -169,6 +173,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             critic_normalizer: normalizers.then(|| EmpiricalNormalizer::new(nc, NORMALIZER_UNTIL)),
             obs: vec![0.0; n * no],
             critic_obs: vec![0.0; n * nc],
+            critic_is_actor: false,
             env,
             cfg,
             alg,
@@ -195,19 +200,22 @@ impl<E: VecEnv> OnPolicyRunner<E> {
     /// Copies the env's current observations into `obs`/`critic_obs`, normalised (and, in
     /// training, folded into the statistics).
     fn observe(&mut self, update: bool) -> Result<(), RlError> {
-        self.obs.copy_from_slice(self.env.observations());
-        self.critic_obs
-            .copy_from_slice(self.env.critic_observations());
+        let (actor, critic) = (self.env.observations(), self.env.critic_observations());
+        self.critic_is_actor = std::ptr::eq(actor, critic)
+            && self.obs_normalizer.is_some() == self.critic_normalizer.is_some();
+        self.obs.copy_from_slice(actor);
         check_finite("policy observation", &self.obs, self.env.num_obs())?;
-        check_finite(
-            "critic observation",
-            &self.critic_obs,
-            self.env.num_critic_obs(),
-        )?;
-        for (norm, x) in [
-            (&mut self.obs_normalizer, &mut self.obs),
-            (&mut self.critic_normalizer, &mut self.critic_obs),
-        ] {
+        if !self.critic_is_actor {
+            self.critic_obs.copy_from_slice(critic);
+            check_finite(
+                "critic observation",
+                &self.critic_obs,
+                self.env.num_critic_obs(),
+            )?;
+        }
+        let critic =
+            (!self.critic_is_actor).then_some((&mut self.critic_normalizer, &mut self.critic_obs));
+        for (norm, x) in std::iter::once((&mut self.obs_normalizer, &mut self.obs)).chain(critic) {
             if let Some(n) = norm {
                 if update {
                     n.update(x);
@@ -216,6 +224,16 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             }
         }
         Ok(())
+    }
+
+    /// The critic's observation normaliser as a checkpoint stores it (the actor's when they
+    /// observe the same values).
+    fn saved_critic_normalizer(&self) -> &Option<EmpiricalNormalizer> {
+        if self.critic_is_actor {
+            &self.obs_normalizer
+        } else {
+            &self.critic_normalizer
+        }
     }
 
     /// Runs `num_iterations` iterations (continuing the numbering of a resumed run), saving a
@@ -243,7 +261,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let physics_before = self.env.step_timings().map(|t| t.physics);
             for _ in 0..t_steps {
                 let policy_start = Instant::now();
-                self.alg.act(&self.obs, &self.critic_obs, &mut actions)?;
+                let critic_obs = critic_view(self.critic_is_actor, &self.obs, &self.critic_obs);
+                self.alg.act(&self.obs, critic_obs, &mut actions)?;
                 policy_time += policy_start.elapsed().as_secs_f64();
                 let env_start = Instant::now();
                 let step = self.env.step(&actions)?;
@@ -282,7 +301,11 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 }
                 self.observe(true)?;
             }
-            self.alg.compute_returns(&self.critic_obs);
+            self.alg.compute_returns(critic_view(
+                self.critic_is_actor,
+                &self.obs,
+                &self.critic_obs,
+            ));
             let physics_time = match (physics_before, self.env.step_timings()) {
                 (Some(before), Some(after)) => (after.physics - before).as_secs_f64(),
                 _ => 0.0,
@@ -366,7 +389,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             num_actions: self.env.num_actions(),
             policy: self.cfg.policy.clone(),
             obs_normalizer: self.obs_normalizer.clone(),
-            critic_obs_normalizer: self.critic_normalizer.clone(),
+            critic_obs_normalizer: self.saved_critic_normalizer().clone(),
             value_normalizer: self.alg.value_normalizer.clone(),
         };
         let path = base.with_extension("json");
@@ -414,6 +437,11 @@ impl<E: VecEnv> OnPolicyRunner<E> {
 
 /// An error naming the env (and, for rows wider than 1, the entry) of the first non-finite
 /// value in `values` (`[num_envs × dim]`).
+/// The critic's current observations: the actor's when the env gives both the same values.
+fn critic_view<'a>(critic_is_actor: bool, obs: &'a [f32], critic_obs: &'a [f32]) -> &'a [f32] {
+    if critic_is_actor { obs } else { critic_obs }
+}
+
 fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
     let Some(i) = orbit_core::parallel::first_non_finite(values) else {
         return Ok(());

@@ -11,6 +11,9 @@ use orbit_rl::{OnPolicyRunner, RlError, RunnerCfg, VecEnv, VecEnvStep};
 struct Bandit {
     rng: EnvRng,
     obs: Vec<f32>,
+    /// A copy of `obs` in memory of its own, given as the critic's observations (else the
+    /// critic is given `obs` itself).
+    critic: Option<Vec<f32>>,
     rewards: Vec<f32>,
     dones: Vec<bool>,
     time_outs: Vec<bool>,
@@ -22,6 +25,7 @@ impl Bandit {
         let mut b = Self {
             rng: EnvRng::new(9, 0, 1),
             obs: vec![0.0; 2 * n],
+            critic: None,
             rewards: vec![0.0; n],
             dones: vec![true; n],
             time_outs: vec![false; n],
@@ -31,9 +35,17 @@ impl Bandit {
         b
     }
 
+    fn with_separate_critic(mut self) -> Self {
+        self.critic = Some(self.obs.clone());
+        self
+    }
+
     fn draw(&mut self) {
         for o in &mut self.obs {
             *o = self.rng.uniform_range(-1.0, 1.0);
+        }
+        if let Some(c) = &mut self.critic {
+            c.copy_from_slice(&self.obs);
         }
     }
 }
@@ -58,7 +70,7 @@ impl VecEnv for Bandit {
         &self.obs
     }
     fn critic_observations(&self) -> &[f32] {
-        &self.obs
+        self.critic.as_deref().unwrap_or(&self.obs)
     }
     fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
         for (e, r) in self.rewards.iter_mut().enumerate() {
@@ -115,4 +127,28 @@ fn ppo_solves_a_contextual_bandit() {
         / 2.0;
     assert!(returns[0] < -2.0, "untrained return {}", returns[0]);
     assert!(err < 0.02, "mean actions {a:?} for contexts {ctx:?}");
+}
+
+/// An env that gives the critic its actor observations (no `critic` group) lets the runner
+/// normalise and upload them once; training must be exactly what separate copies of the same
+/// values give, normalisers included.
+#[test]
+fn a_critic_sharing_the_actor_observations_trains_the_same() {
+    let train = |env: Bandit| {
+        let cfg = RunnerCfg::from_ron(CFG, "bandit.ron", &["empirical_normalization=true".into()])
+            .unwrap();
+        let mut runner = OnPolicyRunner::new(env, cfg, None, Device::flex()).unwrap();
+        runner.learn(4).unwrap();
+        runner
+            .history
+            .iter()
+            .map(|h| {
+                let l = &h.losses;
+                [l.value, l.surrogate, h.mean_return.unwrap()].map(f32::to_bits)
+            })
+            .collect::<Vec<_>>()
+    };
+    let shared = train(Bandit::new(64));
+    let separate = train(Bandit::new(64).with_separate_critic());
+    assert_eq!(shared, separate);
 }
