@@ -11,7 +11,7 @@ use std::path::Path;
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Int, Tensor, TensorData};
-use orbit_core::parallel::{MIN_ENVS_PER_TASK, first_non_finite};
+use orbit_core::parallel::{MIN_ENVS_PER_COPY_TASK, MIN_ENVS_PER_TASK, first_non_finite};
 use orbit_core::rng::EnvRng;
 use rayon::prelude::*;
 
@@ -160,6 +160,8 @@ impl Ppo {
             t < s.num_steps,
             "act called more often than num_steps_per_env"
         );
+        // A step that failed before (a non-finite output) is taken again from the start.
+        self.step_obs.truncate(t);
         let device = self.device.clone();
         let actor_input = tensor2(obs.to_vec(), n, no, &device);
         // The same values (an env without a `critic` group): uploaded once.
@@ -178,22 +180,27 @@ impl Ppo {
             ],
             1,
         ));
-        self.step_obs.push(inputs);
-        let mut mu = Vec::with_capacity(n * na);
-        let mut value = Vec::with_capacity(n);
-        for row in out.chunks_exact(na + 1) {
-            mu.extend_from_slice(&row[..na]);
-            value.push(row[na]);
-        }
+        let s = &mut self.storage;
+        let mu = RolloutStorage::rows(&mut s.mu, t, n, na);
+        let value = RolloutStorage::rows(&mut s.values, t, n, 1);
+        mu.par_chunks_mut(na)
+            .zip(value.par_iter_mut())
+            .zip(out.par_chunks(na + 1))
+            .with_min_len(MIN_ENVS_PER_COPY_TASK)
+            .for_each(|((m, v), row)| {
+                m.copy_from_slice(&row[..na]);
+                *v = row[na];
+            });
         if let Some(normalizer) = &self.value_normalizer {
-            normalizer.denormalize(&mut value);
+            normalizer.denormalize(value);
         }
-        if [&mu, &value].iter().any(|v| first_non_finite(v).is_some()) {
+        if first_non_finite(&out).is_some() || first_non_finite(value).is_some() {
             return Err(RlError::NonFinite("the policy's output".into()));
         }
+        self.step_obs.push(inputs);
         let sigma = &self.sigma;
-        let s = &mut self.storage;
         // Each env draws from its own stream, so the envs run in parallel with the same result.
+        let mu = &s.mu[t * n * na..(t + 1) * n * na];
         actions
             .par_chunks_mut(na)
             .zip(mu.par_chunks(na))
@@ -207,8 +214,6 @@ impl Ppo {
                 *log_prob = gaussian_log_prob(a, m, sigma);
             });
         RolloutStorage::rows(&mut s.actions, t, n, na).copy_from_slice(actions);
-        RolloutStorage::rows(&mut s.mu, t, n, na).copy_from_slice(&mu);
-        RolloutStorage::rows(&mut s.values, t, n, 1).copy_from_slice(&value);
         s.sigma.copy_from_slice(sigma);
         Ok(())
     }
@@ -697,6 +702,32 @@ mod tests {
         let last: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
         p.compute_returns(&last);
         all_obs
+    }
+
+    /// A step rejected for a non-finite policy output stores nothing that counts: taking it
+    /// again with finite observations gives what a clean first attempt gives, and the update
+    /// sees one step's observations, not two.
+    #[test]
+    fn a_rejected_step_is_taken_again_from_the_start() {
+        let obs: Vec<f32> = (0..4 * 3).map(|i| (i % 5) as f32 * 0.2 - 0.4).collect();
+        let mut clean = ppo(4, 1);
+        let mut expected = vec![0.0; 4 * 2];
+        clean.act(&obs, &obs, &mut expected).unwrap();
+
+        let mut p = ppo(4, 1);
+        let mut actions = vec![0.0; 4 * 2];
+        let mut bad = obs.clone();
+        bad[4] = f32::NAN;
+        assert!(matches!(
+            p.act(&bad, &bad, &mut actions),
+            Err(RlError::NonFinite(_))
+        ));
+        p.act(&obs, &obs, &mut actions).unwrap();
+        assert_eq!(actions, expected);
+        assert_eq!(p.storage.mu, clean.storage.mu);
+        assert_eq!(p.storage.values, clean.storage.values);
+        assert_eq!(p.storage.actions_log_prob, clean.storage.actions_log_prob);
+        assert_eq!(p.step_obs.len(), 1);
     }
 
     /// Each env samples from its own stream, so the actions and their log-probabilities are
