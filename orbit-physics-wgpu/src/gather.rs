@@ -123,7 +123,7 @@ impl RowGather {
 
     /// Whether the rows of `envs` envs are worth gathering (else read the whole state).
     pub fn worthwhile(&self, envs: usize) -> bool {
-        envs <= self.max_envs
+        self.floats > 0 && envs <= self.max_envs
     }
 
     /// Bytes of GPU memory the gather's buffers take.

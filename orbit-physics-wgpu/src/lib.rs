@@ -80,8 +80,9 @@ pub struct WgpuBackend {
     /// Ranges of `inputs` written since the last upload (only those are sent: per-step targets
     /// and efforts, not the per-env parameters that rarely change).
     dirty: Vec<std::ops::Range<usize>>,
-    /// Some env was marked fresh: clear the flags after the next dispatch.
-    fresh_pending: bool,
+    /// Envs flagged fresh (state written) since the last step: the next step's first substep
+    /// drops their warm starts, and a republish after a write publishes all of them.
+    fresh_envs: Vec<usize>,
     /// Default masses of links then objects, for mass scales.
     default_masses: Vec<f32>,
     /// Entries of the layout table.
@@ -275,7 +276,7 @@ impl WgpuBackend {
             timestamps,
             inputs: vec![0.0; buffers.inputs_len],
             dirty: std::iter::once(0..buffers.inputs_len).collect(),
-            fresh_pending: false,
+            fresh_envs: Vec::new(),
             default_masses,
             lay_len: table.len(),
             buffers,
@@ -550,10 +551,13 @@ impl WgpuBackend {
         self.mark_stale(only_fresh);
         self.wait_for_pending()?;
         self.pending = Some(submitted);
-        // Fresh flags apply to one dispatch.
-        if std::mem::take(&mut self.fresh_pending) {
+        // Fresh flags last until a step has consumed them (its first substep skips the warm
+        // start); a republish leaves them set.
+        if substeps > 0 && !self.fresh_envs.is_empty() {
             let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
-            self.inputs[fresh..fresh + n].fill(0.0);
+            for e in self.fresh_envs.drain(..) {
+                self.inputs[fresh + e] = 0.0;
+            }
             self.mark(fresh, n);
         }
         Ok(())
@@ -583,13 +587,14 @@ impl WgpuBackend {
         let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
         self.inputs[fresh..fresh + n].fill(1.0);
         self.mark(fresh, n);
-        self.fresh_pending = true;
+        self.fresh_envs = (0..n).collect();
         self.dispatch(0, None)
     }
 
     /// After a state write to `sections` (see [`upload_state_rows`](Self::upload_state_rows)):
-    /// upload those rows, drop the warm starts of the envs and republish them (only them, so
-    /// that only their rows are read back and every other env's state stays as it was).
+    /// upload those rows, flag the envs fresh (the next step drops their warm starts) and
+    /// republish the flagged envs (only them, so that only their rows are read back and every
+    /// other env's state stays as it was).
     fn after_write(
         &mut self,
         env_ids: &[usize],
@@ -597,12 +602,17 @@ impl WgpuBackend {
     ) -> Result<(), PhysicsError> {
         let fresh = self.buffers.fresh;
         for &e in env_ids {
-            self.inputs[fresh + e] = 1.0;
+            if self.inputs[fresh + e] == 0.0 {
+                self.inputs[fresh + e] = 1.0;
+                self.fresh_envs.push(e);
+            }
         }
         self.mark(fresh, self.buffers.num_envs);
-        self.fresh_pending = true;
         self.upload_state_rows(env_ids, sections);
-        self.dispatch(0, Some(env_ids))
+        let flagged = std::mem::take(&mut self.fresh_envs);
+        let result = self.dispatch(0, Some(&flagged));
+        self.fresh_envs = flagged;
+        result
     }
 
     fn check_articulation(&self, a: usize) -> Result<layout::ArticulationOffsets, PhysicsError> {
@@ -912,8 +922,8 @@ mod tests {
         root.pose.pos = Vec3::new(0.4, 0.1, 0.3);
         b.write_root_state(0, &ids[1..3], &[root; 2]).unwrap();
         assert!(
-            matches!(&b.stale, Stale::Envs(e) if e.len() == 2),
-            "only the written envs are stale"
+            matches!(&b.stale, Stale::Envs(e) if e.len() == 5),
+            "only the envs written since the last step are stale"
         );
         let gathered: Vec<u32> = b.state_f32().iter().map(|x| x.to_bits()).collect();
         let mut whole = vec![Vec4::ZERO; b.buffers.state_len.div_ceil(4)];

@@ -106,5 +106,13 @@ fn soft_step_contacts() {
             orbit_conformance::LowSpeedFriction::Coulomb,
         );
         orbit_conformance::franka_tracks_mujoco_rollouts_with(&sim, 0.025);
+        orbit_conformance::a_reset_env_forgets_its_past_with(&sim);
+    }
+}
+
+#[test]
+fn a_reset_env_forgets_its_past() {
+    if gpu_available() {
+        orbit_conformance::a_reset_env_forgets_its_past(BACKEND_NAME);
     }
 }
