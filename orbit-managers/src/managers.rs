@@ -116,7 +116,7 @@ impl ActionManager {
             let d = term.dim();
             self.scratch.resize(n * d, 0.0);
             self.scratch
-                .par_chunks_mut(d)
+                .par_chunks_mut(d.max(1))
                 .with_min_len(MIN_ENVS_PER_COPY_TASK)
                 .zip(actions.par_chunks(self.dim))
                 .for_each(|(to, from)| to.copy_from_slice(&from[offset..offset + d]));

@@ -285,7 +285,7 @@ impl Ppo {
         let mut totals = LossStats::default();
         let rollout = Minibatch::upload(
             &self.storage,
-            std::mem::take(&mut self.step_obs),
+            &self.step_obs,
             &perm,
             m,
             cfg.normalize_advantage_per_mini_batch,
@@ -301,7 +301,9 @@ impl Ppo {
             }
         }
         let updates = (cfg.num_learning_epochs * cfg.num_mini_batches) as f32;
+        // Only now: an update that failed can be run again on the same rollout.
         self.storage.step = 0;
+        self.step_obs.clear();
         Ok(LossStats {
             value: totals.value / updates,
             surrogate: totals.surrogate / updates,
@@ -578,7 +580,7 @@ impl Minibatch {
     /// in every epoch, so this is done once, here.
     fn upload(
         s: &RolloutStorage,
-        step_obs: Vec<(Tensor<2>, Tensor<2>)>,
+        step_obs: &[(Tensor<2>, Tensor<2>)],
         perm: &[usize],
         m: usize,
         per_minibatch: bool,
@@ -590,7 +592,7 @@ impl Minibatch {
             s.num_steps,
             "the update needs the observations of every step"
         );
-        let (obs, critic_obs): (Vec<_>, Vec<_>) = step_obs.into_iter().unzip();
+        let (obs, critic_obs): (Vec<_>, Vec<_>) = step_obs.iter().cloned().unzip();
         let mut advantages = s.advantages.clone();
         if per_minibatch {
             for chunk in perm.chunks_exact(m) {
@@ -674,15 +676,8 @@ mod tests {
     /// The whole rollout as one minibatch.
     fn whole_rollout(p: &Ppo) -> Minibatch {
         let all: Vec<usize> = (0..p.storage.batch_size()).collect();
-        Minibatch::upload(
-            &p.storage,
-            p.step_obs.clone(),
-            &all,
-            all.len(),
-            false,
-            &p.device,
-        )
-        .select(&all, &p.device)
+        Minibatch::upload(&p.storage, &p.step_obs, &all, all.len(), false, &p.device)
+            .select(&all, &p.device)
     }
 
     /// Fills the storage with a rollout on synthetic observations and rewards; returns the
@@ -780,7 +775,7 @@ mod tests {
         let mut p = ppo(16, 4);
         let all_obs = rollout(&mut p);
         let perm: Vec<usize> = (0..64).map(|i| (i * 37) % 64).collect();
-        let r = Minibatch::upload(&p.storage, p.step_obs.clone(), &perm, 16, true, &p.device);
+        let r = Minibatch::upload(&p.storage, &p.step_obs, &perm, 16, true, &p.device);
         for chunk in perm.chunks_exact(16) {
             let mb = r.select(chunk, &p.device);
             let obs = values(mb.obs);

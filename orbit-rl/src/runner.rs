@@ -201,7 +201,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
     /// training, folded into the statistics).
     fn observe(&mut self, update: bool) -> Result<(), RlError> {
         let (actor, critic) = (self.env.observations(), self.env.critic_observations());
-        self.critic_is_actor = std::ptr::eq(actor, critic)
+        self.critic_is_actor = !actor.is_empty()
+            && std::ptr::eq(actor, critic)
             && self.obs_normalizer.is_some() == self.critic_normalizer.is_some();
         self.obs.copy_from_slice(actor);
         check_finite("policy observation", &self.obs, self.env.num_obs())?;
@@ -435,13 +436,13 @@ impl<E: VecEnv> OnPolicyRunner<E> {
     }
 }
 
-/// An error naming the env (and, for rows wider than 1, the entry) of the first non-finite
-/// value in `values` (`[num_envs × dim]`).
 /// The critic's current observations: the actor's when the env gives both the same values.
 fn critic_view<'a>(critic_is_actor: bool, obs: &'a [f32], critic_obs: &'a [f32]) -> &'a [f32] {
     if critic_is_actor { obs } else { critic_obs }
 }
 
+/// An error naming the env (and, for rows wider than 1, the entry) of the first non-finite
+/// value in `values` (`[num_envs × dim]`).
 fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
     let Some(i) = orbit_core::parallel::first_non_finite(values) else {
         return Ok(());

@@ -36,8 +36,8 @@ pub struct RolloutStorage {
 }
 
 impl RolloutStorage {
-    /// The largest magnitudes in the rollout (rewards, returns, action means; the runner has
-    /// checked that the observations are finite)
+    /// The largest magnitudes in the rollout (rewards, returns, action means; the observations
+    /// live on the learner's device and are not included)
     /// and the smallest noise std, for diagnosing a diverged update.
     pub fn extremes(&self) -> String {
         // NaN wins (f32::max would drop it).

@@ -75,7 +75,7 @@ impl ActionTerm for JointAction {
     }
 
     fn process(&mut self, _scene: &Scene, raw: &[f32]) {
-        let (d, p, offsets) = (self.dim(), &self.p, &self.offsets);
+        let (d, p, offsets) = (self.dim().max(1), &self.p, &self.offsets);
         self.processed
             .par_chunks_mut(d)
             .with_min_len(MIN_ENVS_PER_COPY_TASK)
@@ -101,11 +101,12 @@ impl ActionTerm for JointAction {
         let own_bias = self.p.compensate_bias && !self.backend_compensation;
         let host_effort = self.kind == JointActionKind::Effort && !self.backend_compensation;
         let (dofs, effort_clip) = (&self.sel.dofs, &self.p.effort_clip);
+        // (`max(1)`: an articulation without dofs, or a term without joints, has empty rows.)
         self.full
-            .par_chunks_mut(n)
+            .par_chunks_mut(n.max(1))
             .with_min_len(MIN_ENVS_PER_COPY_TASK)
-            .zip(self.processed.par_chunks(d))
-            .zip(view.bias_forces.par_chunks(n))
+            .zip(self.processed.par_chunks(d.max(1)))
+            .zip(view.bias_forces.par_chunks(n.max(1)))
             .for_each(|((full, processed), bias)| {
                 for (k, &j) in dofs.iter().enumerate() {
                     let mut v = processed[k];
