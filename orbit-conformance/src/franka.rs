@@ -461,9 +461,10 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
         let mut sim = build();
         run(&mut sim, 0..20, 0.0);
         let o = sim.rigid_object(0);
-        let mut root = orbit_core::scene::RootState::default();
-        root.pose = Pose::new(o.pos[0], o.quat[0]);
-        root
+        orbit_core::scene::RootState {
+            pose: Pose::new(o.pos[0], o.quat[0]),
+            ..Default::default()
+        }
     };
     let trajectory = |history: bool| {
         let mut sim = build();
