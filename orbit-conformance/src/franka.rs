@@ -432,10 +432,10 @@ pub fn resets_leave_other_envs_untouched(backend: &str) {
     );
 }
 
-/// A reset env forgets its past: after 20 steps in which the box settles on the table (contacts
-/// whose impulses the solver warm-starts from), the arm and the box are written back to a
-/// state (the default joints, the box where it settled, at rest); the env then follows the same
-/// trajectory, bit for bit, as one that starts from that state.
+/// A reset env forgets its past: after 5 steps in which the box slides over the table (contacts
+/// with friction impulses, which the solver warm-starts from), the arm and the box are written
+/// back to a state (the default joints, the box settled on the table, at rest); the env then
+/// follows the same trajectory, bit for bit, as one that starts from that state.
 pub fn a_reset_env_forgets_its_past(backend: &str) {
     a_reset_env_forgets_its_past_with(&sim_cfg(backend));
 }
@@ -469,7 +469,19 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
     let trajectory = |history: bool| {
         let mut sim = build();
         if history {
-            run(&mut sim, 0..20, 0.0);
+            // The box slides over the table: its contacts carry friction impulses when the
+            // reset comes.
+            let sliding = orbit_core::scene::RootState {
+                lin_vel: glam::Vec3::new(0.6, 0.0, 0.0),
+                ..settled
+            };
+            sim.write_root_state(0, &[0], &[sliding])
+                .expect("root state");
+            run(&mut sim, 0..5, 0.0);
+            assert!(
+                sim.rigid_object(0).lin_vel[0].x > 0.1,
+                "the box still slides"
+            );
         }
         sim.write_joint_state(0, &[0], &arm.default_joint_pos, &arm.default_joint_vel)
             .expect("joint state");
