@@ -45,6 +45,22 @@ pub struct ObjectOffsets {
     pub ang: usize,
 }
 
+impl ArticulationOffsets {
+    /// State section `k` of the joints (0 positions, 1 velocities, 2 bias forces, 3 applied
+    /// efforts) as `(first float, floats per env)`.
+    pub fn joint_section(&self, k: usize) -> (usize, usize) {
+        (self.joints + k * self.joint_len, self.dofs)
+    }
+}
+
+impl ObjectOffsets {
+    /// The object's state sections (position, quaternion, linear and angular velocity) as
+    /// `(first float, floats per env)`.
+    pub fn sections(&self) -> [(usize, usize); 4] {
+        [(self.pos, 3), (self.quat, 4), (self.lin, 3), (self.ang, 3)]
+    }
+}
+
 /// The whole buffer layout.
 #[derive(Clone, Debug)]
 pub struct BufferLayout {
@@ -141,9 +157,7 @@ impl BufferLayout {
     pub fn env_sections(&self) -> Vec<(usize, usize)> {
         let mut sections = Vec::new();
         for a in &self.articulations {
-            for k in 0..4 {
-                sections.push((a.joints + k * a.joint_len, a.dofs));
-            }
+            sections.extend((0..4).map(|k| a.joint_section(k)));
             let (l3, l4) = (3 * a.links, 4 * a.links);
             sections.extend([
                 (a.link_pos, l3),
@@ -153,7 +167,7 @@ impl BufferLayout {
             ]);
         }
         for o in &self.objects {
-            sections.extend([(o.pos, 3), (o.quat, 4), (o.lin, 3), (o.ang, 3)]);
+            sections.extend(o.sections());
         }
         sections
     }

@@ -502,14 +502,10 @@ impl WgpuBackend {
     }
 
     /// Runs `substeps` substeps (0: only recompute what is published, for the envs flagged
-    /// fresh if `only_fresh` lists them, else for all); the host mirror reads the published
-    /// state back when it is next looked at.
-    fn dispatch(
-        &mut self,
-        substeps: u32,
-        only_fresh: Option<&[usize]>,
-    ) -> Result<(), PhysicsError> {
-        let only_fresh = only_fresh.filter(|_| substeps == 0);
+    /// fresh if `only_fresh`, else for all); the host mirror reads the published state back
+    /// when it is next looked at.
+    fn dispatch(&mut self, substeps: u32, only_fresh: bool) -> Result<(), PhysicsError> {
+        let only_fresh = only_fresh && substeps == 0;
         self.upload_inputs();
         // Steps (not republishes) are timed.
         let timer = self.timer.as_ref().filter(|_| substeps > 0);
@@ -518,7 +514,7 @@ impl WgpuBackend {
         queue.write_buffer(
             &self.params_buf,
             0,
-            bytemuck::cast_slice(&[substeps, u32::from(only_fresh.is_some()), 0, 0]),
+            bytemuck::cast_slice(&[substeps, u32::from(only_fresh), 0, 0]),
         );
         let device = &gpu.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -563,10 +559,11 @@ impl WgpuBackend {
         Ok(())
     }
 
-    /// Records what a dispatch republishing `only` (or stepping all envs) makes stale.
-    fn mark_stale(&mut self, only: Option<&[usize]>) {
+    /// Records what a dispatch makes stale: the envs flagged fresh if it republished only
+    /// those, else every env.
+    fn mark_stale(&mut self, only_fresh: bool) {
         let previous = std::mem::replace(&mut self.stale, Stale::All);
-        let ids = only.map(|ids| ids.iter().map(|&e| e as u32));
+        let ids = only_fresh.then(|| self.fresh_envs.iter().map(|&e| e as u32));
         let stale = match (ids, previous) {
             (Some(ids), _) if self.state.is_current() => Stale::Envs(ids.collect()),
             (Some(ids), Stale::Envs(mut earlier)) => {
@@ -588,7 +585,7 @@ impl WgpuBackend {
         self.inputs[fresh..fresh + n].fill(1.0);
         self.mark(fresh, n);
         self.fresh_envs = (0..n).collect();
-        self.dispatch(0, None)
+        self.dispatch(0, false)
     }
 
     /// After a state write to `sections` (see [`upload_state_rows`](Self::upload_state_rows)):
@@ -609,10 +606,7 @@ impl WgpuBackend {
         }
         self.mark(fresh, self.buffers.num_envs);
         self.upload_state_rows(env_ids, sections);
-        let flagged = std::mem::take(&mut self.fresh_envs);
-        let result = self.dispatch(0, Some(&flagged));
-        self.fresh_envs = flagged;
-        result
+        self.dispatch(0, true)
     }
 
     fn check_articulation(&self, a: usize) -> Result<layout::ArticulationOffsets, PhysicsError> {
@@ -713,7 +707,7 @@ impl PhysicsBackend for WgpuBackend {
     }
 
     fn step(&mut self) -> Result<(), PhysicsError> {
-        self.dispatch(1, None)
+        self.dispatch(1, false)
     }
 
     fn step_n(&mut self, n: usize) -> Result<(), PhysicsError> {
@@ -722,7 +716,7 @@ impl PhysicsBackend for WgpuBackend {
         }
         let n = u32::try_from(n)
             .map_err(|_| PhysicsError::InvalidInput(format!("{n} steps in one call")))?;
-        self.dispatch(n, None)
+        self.dispatch(n, false)
     }
 
     fn articulation(&self, a: usize) -> ArticulationView<'_> {
@@ -810,7 +804,7 @@ impl PhysicsBackend for WgpuBackend {
             let row = row + off.joint_len;
             s[row..row + dofs].copy_from_slice(&vel[i * dofs..(i + 1) * dofs]);
         }
-        let sections = [(off.joints, dofs), (off.joints + off.joint_len, dofs)];
+        let sections = [off.joint_section(0), off.joint_section(1)];
         self.after_write(env_ids, &sections)
     }
 
@@ -824,8 +818,7 @@ impl PhysicsBackend for WgpuBackend {
         check_env_ids(env_ids, self.buffers.num_envs)?;
         check_root_states(states, env_ids.len())?;
         self.put_root_states(o, env_ids, states);
-        let off = &self.buffers.objects[o];
-        let sections = [(off.pos, 3), (off.quat, 4), (off.lin, 3), (off.ang, 3)];
+        let sections = self.buffers.objects[o].sections();
         self.after_write(env_ids, &sections)
     }
 
@@ -850,7 +843,7 @@ impl PhysicsBackend for WgpuBackend {
         }
         self.mark(self.buffers.mass_scale, self.buffers.num_envs * bodies);
         // Bias forces depend on the masses: republish.
-        self.dispatch(0, None)
+        self.dispatch(0, false)
     }
 
     fn set_friction(
