@@ -194,7 +194,7 @@ impl Ppo {
         if let Some(normalizer) = &self.value_normalizer {
             normalizer.denormalize(value);
         }
-        if first_non_finite(&out).is_some() || first_non_finite(value).is_some() {
+        if first_non_finite(mu).is_some() || first_non_finite(value).is_some() {
             return Err(RlError::NonFinite("the policy's output".into()));
         }
         self.step_obs.push(inputs);
