@@ -29,14 +29,34 @@ pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
 /// 4 096 envs' observations are scanned on one thread.
 const MIN_VALUES_PER_TASK: usize = 1 << 18;
 
+/// Values per block of [`first_non_finite`]: a whole block is checked without branching, so
+/// that the check vectorises, and only a block found to hold a bad value is searched for it.
+const SCAN_BLOCK: usize = 1 << 12;
+
 /// The index of the first value that is NaN or infinite, scanned on every core; the same
 /// index a sequential scan finds.
 pub fn first_non_finite(values: &[f32]) -> Option<usize> {
     use rayon::prelude::*;
+    let block = values
+        .par_chunks(SCAN_BLOCK)
+        .with_min_len(MIN_VALUES_PER_TASK / SCAN_BLOCK)
+        .position_first(|b| !all_finite(b))?;
+    let start = block * SCAN_BLOCK;
+    let end = (start + SCAN_BLOCK).min(values.len());
+    values[start..end]
+        .iter()
+        .position(|v| !v.is_finite())
+        .map(|i| start + i)
+}
+
+/// Whether no value is NaN or infinite (an exponent of all ones), checked without an early exit
+/// so that the compiler vectorises it.
+fn all_finite(values: &[f32]) -> bool {
+    const EXPONENT: u32 = 0x7f80_0000;
     values
-        .par_iter()
-        .with_min_len(MIN_VALUES_PER_TASK)
-        .position_first(|v| !v.is_finite())
+        .iter()
+        .fold(0, |max, v| max.max(v.to_bits() & EXPONENT))
+        != EXPONENT
 }
 
 #[cfg(test)]
@@ -56,6 +76,20 @@ mod tests {
                 Some(3 * MIN_VALUES_PER_TASK + 7),
                 "{threads} threads"
             );
+        }
+    }
+
+    /// The extremes of the finite range pass; either infinity and NaN of any sign are found,
+    /// also in the last, partial block.
+    #[test]
+    fn first_non_finite_finds_every_kind_of_bad_value() {
+        let mut values = vec![0.5f32; 3 * SCAN_BLOCK + 5];
+        let last = values.len() - 1;
+        values[..4].copy_from_slice(&[f32::MAX, f32::MIN, f32::MIN_POSITIVE / 2.0, -0.0]);
+        assert_eq!(first_non_finite(&values), None);
+        for bad in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN] {
+            values[last] = bad;
+            assert_eq!(first_non_finite(&values), Some(last), "{bad}");
         }
     }
 }
