@@ -246,12 +246,19 @@ impl ObservationManager {
     }
 
     pub(crate) fn compute(&mut self, env: &EnvView<'_>, noise: &mut EnvRngs) {
+        // A term reads only the env's state and writes only its own buffer: all terms are
+        // computed concurrently, under one wake-up of the thread pool.
+        self.groups.par_iter_mut().for_each(|g| {
+            g.terms
+                .par_iter_mut()
+                .for_each(|t| t.term.compute(env, &mut t.buf));
+        });
+        // Noise draws follow term order within each env's stream, so the terms go in order.
         for g in &mut self.groups {
             let mut offset = 0;
             for t in &mut g.terms {
                 let d = t.term.dim();
                 let width = t.out_dim();
-                t.term.compute(env, &mut t.buf);
                 if d == 0 {
                     continue;
                 }
@@ -332,8 +339,10 @@ impl ObservationManager {
 /// Sums weighted reward terms times `step_dt`; keeps per-term episode sums.
 pub struct RewardManager {
     terms: Vec<(String, f32, Box<dyn RewardTerm>)>,
-    buf: Vec<f32>,
-    pub(crate) episode_sums: Vec<Vec<f32>>,
+    /// Each term's unweighted values of the last step, `[term][env]`.
+    values: Vec<Vec<f32>>,
+    /// Each env's weighted per-term sums over its current episode, `[env][term]`.
+    episode_sums: Vec<f32>,
 }
 
 impl RewardManager {
@@ -364,27 +373,44 @@ impl RewardManager {
             terms.push((name.clone(), t.weight, build_reward(&t.func, &ctx)?));
         }
         let n = scene.num_envs();
-        let sums = vec![vec![0.0; n]; terms.len()];
         Ok(Self {
+            values: vec![vec![0.0; n]; terms.len()],
+            episode_sums: vec![0.0; n * terms.len()],
             terms,
-            buf: vec![0.0; n],
-            episode_sums: sums,
         })
     }
 
+    /// Writes each env's reward `Σ wₖ·rₖ·dt` (terms added in order) and adds each weighted
+    /// term to the env's episode sums.
     pub(crate) fn compute(&mut self, env: &EnvView<'_>, dt: f32, reward: &mut [f32]) {
-        reward.fill(0.0);
-        for (k, (_, weight, term)) in self.terms.iter_mut().enumerate() {
-            if *weight == 0.0 {
-                continue;
-            }
-            term.compute(env, &mut self.buf);
-            for (e, r) in reward.iter_mut().enumerate() {
-                let v = self.buf[e] * *weight * dt;
-                *r += v;
-                self.episode_sums[k][e] += v;
-            }
+        let num_terms = self.terms.len();
+        if num_terms == 0 {
+            reward.fill(0.0);
+            return;
         }
+        // A term reads only the env's state and writes only its own buffer: all terms are
+        // computed concurrently, under one wake-up of the thread pool.
+        self.terms
+            .par_iter_mut()
+            .zip(self.values.par_iter_mut())
+            .filter(|((_, weight, _), _)| *weight != 0.0)
+            .for_each(|((_, _, term), values)| term.compute(env, values));
+        let (terms, values) = (&self.terms, &self.values);
+        reward
+            .par_iter_mut()
+            .zip(self.episode_sums.par_chunks_mut(num_terms))
+            .enumerate()
+            .with_min_len(MIN_ENVS_PER_COPY_TASK)
+            .for_each(|(e, (r, sums))| {
+                *r = 0.0;
+                for (((_, weight, _), values), sum) in terms.iter().zip(values).zip(sums) {
+                    if *weight != 0.0 {
+                        let v = values[e] * weight * dt;
+                        *r += v;
+                        *sum += v;
+                    }
+                }
+            });
     }
 
     /// The unweighted value of every term on the current state, weight-0 terms included
@@ -392,9 +418,10 @@ impl RewardManager {
     pub(crate) fn evaluate_terms(&mut self, env: &EnvView<'_>) -> Vec<(String, Vec<f32>)> {
         self.terms
             .iter_mut()
-            .map(|(name, _, term)| {
-                term.compute(env, &mut self.buf);
-                (name.clone(), self.buf.clone())
+            .zip(&mut self.values)
+            .map(|((name, _, term), values)| {
+                term.compute(env, values);
+                (name.clone(), values.clone())
             })
             .collect()
     }
@@ -434,16 +461,17 @@ impl RewardManager {
         episode_s: f32,
         log: &mut BTreeMap<String, f32>,
     ) {
+        let num_terms = self.terms.len();
         for (k, (name, _, _)) in self.terms.iter().enumerate() {
             let mean = env_ids
                 .iter()
-                .map(|&e| self.episode_sums[k][e])
+                .map(|&e| self.episode_sums[e * num_terms + k])
                 .sum::<f32>()
                 / env_ids.len().max(1) as f32;
             log.insert(format!("Episode Reward/{name}"), mean / episode_s);
-            for &e in env_ids {
-                self.episode_sums[k][e] = 0.0;
-            }
+        }
+        for &e in env_ids {
+            self.episode_sums[e * num_terms..(e + 1) * num_terms].fill(0.0);
         }
     }
 }
