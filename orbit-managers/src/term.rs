@@ -55,13 +55,15 @@ impl TermContext<'_> {
 pub trait ObservationTerm: Send + Sync {
     /// Values per env.
     fn dim(&self) -> usize;
-    /// Computes the term for all envs into `out` (row-major, `num_envs × dim`).
+    /// Computes the term for all envs into `out` (row-major, `num_envs × dim`). The manager
+    /// may run a step's terms concurrently, so a term depends only on `env` and itself.
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]);
 }
 
 /// A reward term: writes one value per env (before weight and `step_dt`).
 pub trait RewardTerm: Send + Sync {
-    /// Computes the term for all envs.
+    /// Computes the term for all envs. The manager may run a step's terms concurrently, so a
+    /// term depends only on `env` and itself.
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]);
 }
 
