@@ -282,7 +282,14 @@ impl Ppo {
             perm.swap(i, j);
         }
         self.updates += 1;
-        let mut totals = LossStats::default();
+        // A failed update leaves the network, the optimiser and the learning rate as they
+        // were (tensors are shared, so this copies no weights).
+        let before = (
+            self.model.clone(),
+            self.optimizer.clone(),
+            self.learning_rate,
+        );
+        let mut totals: Option<Tensor<1>> = None;
         let rollout = Minibatch::upload(
             &self.storage,
             &self.step_obs,
@@ -294,21 +301,54 @@ impl Ppo {
         for _ in 0..cfg.num_learning_epochs {
             for k in 0..cfg.num_mini_batches {
                 let batch = rollout.select(&perm[k * m..(k + 1) * m], &self.device);
-                let stats = self.step_minibatch(batch)?;
-                totals.value += stats.value;
-                totals.surrogate += stats.surrogate;
-                totals.entropy += stats.entropy;
+                let losses = match self.step_minibatch(batch) {
+                    Ok(losses) => losses,
+                    Err(e) => return Err(self.restore(before, e)),
+                };
+                totals = Some(match totals {
+                    Some(t) => t + losses,
+                    None => losses,
+                });
             }
         }
         let updates = (cfg.num_learning_epochs * cfg.num_mini_batches) as f32;
+        // One read for the whole update: a NaN in any minibatch's losses makes its sum NaN.
+        let totals = values(totals.expect("an update has at least one minibatch"));
+        let [value, surrogate, entropy] = totals[..] else {
+            unreachable!("three losses per minibatch")
+        };
+        if !(value.is_finite() && surrogate.is_finite()) {
+            let e = RlError::NonFinite(format!(
+                "the PPO loss (mean value loss {}, surrogate {} over the update; learning rate \
+                 {:.2e}; rollout {})",
+                value / updates,
+                surrogate / updates,
+                self.learning_rate,
+                self.storage.extremes()
+            ));
+            return Err(self.restore(before, e));
+        }
         // Only now: an update that failed can be run again on the same rollout.
         self.storage.step = 0;
         self.step_obs.clear();
         Ok(LossStats {
-            value: totals.value / updates,
-            surrogate: totals.surrogate / updates,
-            entropy: totals.entropy / updates,
+            value: value / updates,
+            surrogate: surrogate / updates,
+            entropy: entropy / updates,
         })
+    }
+
+    /// Puts back the network, optimiser and learning rate from before a failed update, and
+    /// passes its error on.
+    fn restore(
+        &mut self,
+        (model, optimizer, lr): (ActorCritic, ModuleOptimizer, f64),
+        e: RlError,
+    ) -> RlError {
+        self.model = model;
+        self.optimizer = optimizer;
+        self.learning_rate = lr;
+        e
     }
 
     /// The losses of a minibatch under the current network, and the KL divergence from the
@@ -379,38 +419,33 @@ impl Ppo {
         }
     }
 
-    fn step_minibatch(&mut self, mb: Minibatch) -> Result<LossStats, RlError> {
+    /// One gradient step on a minibatch. Returns its value, surrogate and entropy losses as a
+    /// `[3]` tensor, left on the device. With the fixed schedule the step never waits for the
+    /// device: the gradient clipping is computed there too. The adaptive schedule needs the
+    /// KL before the step, so it reads it (with the losses, checked here) once per minibatch.
+    fn step_minibatch(&mut self, mb: Minibatch) -> Result<Tensor<1>, RlError> {
         let l = self.minibatch_losses(mb);
         let cfg = &self.cfg;
         let loss = l.surrogate.clone() + l.value.clone().mul_scalar(cfg.value_loss_coef)
             - l.entropy.clone().mul_scalar(cfg.entropy_coef);
         let mut grads = GradientsParams::from_grads(loss.backward(), &self.model);
-        // One readback per minibatch (a GPU learner waits for each): the KL, the three
-        // losses and the squared gradient norms of the actor (with the noise parameter) and
-        // of the critic.
-        let read = values(Tensor::cat(
-            vec![
-                l.kl,
-                l.value.detach(),
-                l.surrogate.detach(),
-                l.entropy.detach(),
-                actor_grad_norm_squared(&self.model, &grads),
-                grad_norm_squared(&self.model.critic, &grads),
-            ],
+        let losses = Tensor::cat(
+            vec![l.value.detach(), l.surrogate.detach(), l.entropy.detach()],
             0,
-        ));
-        let [kl, value, surrogate, entropy, actor_sq, critic_sq] = read[..] else {
-            unreachable!("six scalars were concatenated")
-        };
-        if !(value.is_finite() && surrogate.is_finite()) {
-            return Err(RlError::NonFinite(format!(
-                "the PPO loss (value {value}, surrogate {surrogate}, KL {kl}, learning rate \
-                 {:.2e}; rollout {})",
-                self.learning_rate,
-                self.storage.extremes()
-            )));
-        }
+        );
         if cfg.schedule == Schedule::Adaptive {
+            let read = values(Tensor::cat(vec![l.kl, losses.clone()], 0));
+            let [kl, value, surrogate, _] = read[..] else {
+                unreachable!("four scalars were concatenated")
+            };
+            if !(value.is_finite() && surrogate.is_finite()) {
+                return Err(RlError::NonFinite(format!(
+                    "the PPO loss (value {value}, surrogate {surrogate}, KL {kl}, learning \
+                     rate {:.2e}; rollout {})",
+                    self.learning_rate,
+                    self.storage.extremes()
+                )));
+            }
             let desired = cfg.desired_kl;
             if kl > 2.0 * desired {
                 self.learning_rate = (self.learning_rate / 1.5).max(1e-5);
@@ -418,28 +453,10 @@ impl Ppo {
                 self.learning_rate = (self.learning_rate * 1.5).min(1e-2);
             }
         }
-        match cfg.grad_clip {
-            GradClip::Global => clip_grad_norm(
-                &self.model,
-                &mut grads,
-                (actor_sq + critic_sq).sqrt(),
-                cfg.max_grad_norm,
-            ),
-            GradClip::PerNetwork => clip_per_network(
-                &self.model,
-                &mut grads,
-                actor_sq.sqrt(),
-                critic_sq.sqrt(),
-                cfg.max_grad_norm,
-            ),
-        }
+        clip_gradients(&self.model, &mut grads, cfg.grad_clip, cfg.max_grad_norm);
         let model = self.model.clone();
         self.model = self.optimizer.step(self.learning_rate, model, grads);
-        Ok(LossStats {
-            value,
-            surrogate,
-            entropy,
-        })
+        Ok(losses)
     }
 
     /// Saves the network and the optimiser state as burnpack files `<base>.bpk` and
@@ -513,38 +530,51 @@ fn actor_grad_norm_squared(model: &ActorCritic, grads: &GradientsParams) -> Tens
     grad_norm_squared(&model.actor, grads) + grad_norm_squared(&model.std, grads)
 }
 
-/// Clips the actor (with the noise parameter, gradient norm `actor_norm`) and the critic
-/// (`critic_norm`) each to `max_norm` (RSL-RL 5).
-fn clip_per_network(
-    model: &ActorCritic,
-    grads: &mut GradientsParams,
-    actor_norm: f32,
-    critic_norm: f32,
-    max_norm: f32,
-) {
-    clip_grad_norm(&model.actor, grads, actor_norm, max_norm);
-    clip_grad_norm(&model.std, grads, actor_norm, max_norm);
-    clip_grad_norm(&model.critic, grads, critic_norm, max_norm);
+/// Clips the gradients to `max_norm`: all together, or the actor's (with the noise parameter)
+/// and the critic's each (RSL-RL 5), on the device.
+fn clip_gradients(model: &ActorCritic, grads: &mut GradientsParams, mode: GradClip, max_norm: f32) {
+    let actor_sq = actor_grad_norm_squared(model, grads);
+    let critic_sq = grad_norm_squared(&model.critic, grads);
+    match mode {
+        GradClip::Global => {
+            let factor = clip_factor(actor_sq + critic_sq, max_norm);
+            scale_grads(model, grads, &factor);
+        }
+        GradClip::PerNetwork => {
+            let actor = clip_factor(actor_sq, max_norm);
+            scale_grads(&model.actor, grads, &actor);
+            scale_grads(&model.std, grads, &actor);
+            scale_grads(&model.critic, grads, &clip_factor(critic_sq, max_norm));
+        }
+    }
 }
 
-/// Scales the gradients of `module`'s parameters by `max_norm / (norm + 1e-6)` when their
-/// norm `norm` exceeds `max_norm` (`torch.nn.utils.clip_grad_norm_`).
-fn clip_grad_norm<M: Module>(module: &M, grads: &mut GradientsParams, norm: f32, max_norm: f32) {
+/// The factor `min(1, max_norm / (‖g‖ + 1e-6))` that clips gradients of squared norm
+/// `norm_squared` to `max_norm` (`torch.nn.utils.clip_grad_norm_`), as a `[1]` tensor.
+fn clip_factor(norm_squared: Tensor<1>, max_norm: f32) -> Tensor<1> {
+    norm_squared
+        .sqrt()
+        .add_scalar(1e-6)
+        .recip()
+        .mul_scalar(max_norm)
+        .clamp_max(1.0)
+}
+
+/// Multiplies the gradients of `module`'s parameters by `factor` (a `[1]` tensor).
+fn scale_grads<M: Module>(module: &M, grads: &mut GradientsParams, factor: &Tensor<1>) {
     struct Scale<'a> {
         grads: &'a mut GradientsParams,
-        factor: f32,
+        factor: &'a Tensor<1>,
     }
     impl ModuleVisitor for Scale<'_> {
         fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
             if let Some(g) = self.grads.remove::<D>(param.id) {
-                self.grads.register(param.id, g.mul_scalar(self.factor));
+                let factor = self.factor.clone().reshape([1; D]);
+                self.grads.register(param.id, g.mul(factor));
             }
         }
     }
-    let factor = max_norm / (norm + 1e-6);
-    if factor < 1.0 {
-        module.visit(&mut Scale { grads, factor });
-    }
+    module.visit(&mut Scale { grads, factor });
 }
 
 /// The loss terms of one minibatch.
@@ -882,9 +912,12 @@ mod tests {
         let critic = |g: &GradientsParams| grad_norm_squared(&p.model.critic, g);
         let (a, c) = (norm(&grads, &actor), norm(&grads, &critic));
         assert!(a > 1e-2 && c > 1e-2, "norms {a} {c}");
-        clip_per_network(&p.model, &mut grads, a, c, 1e-2);
+        clip_gradients(&p.model, &mut grads, GradClip::PerNetwork, 1e-2);
         assert!((norm(&grads, &actor) - 1e-2).abs() < 1e-6);
         assert!((norm(&grads, &critic) - 1e-2).abs() < 1e-6);
+        // Under the limit, nothing changes.
+        clip_gradients(&p.model, &mut grads, GradClip::PerNetwork, 1.0);
+        assert!((norm(&grads, &actor) - 1e-2).abs() < 1e-6);
     }
 
     /// After clipping, the global gradient norm equals the limit.
@@ -898,7 +931,8 @@ mod tests {
         let norm = grad_norm_squared(&p.model, &grads)
             .into_scalar::<f32>()
             .sqrt();
-        clip_grad_norm(&p.model, &mut grads, norm, 1e-3);
+        assert!(norm > 1e-3, "norm {norm}");
+        clip_gradients(&p.model, &mut grads, GradClip::Global, 1e-3);
         struct Norm<'a>(&'a GradientsParams, f32);
         impl ModuleVisitor for Norm<'_> {
             fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
@@ -910,5 +944,31 @@ mod tests {
         let mut n = Norm(&grads, 0.0);
         p.model.visit(&mut n);
         assert!((n.1.sqrt() - 1e-3).abs() < 1e-6, "norm {}", n.1.sqrt());
+    }
+
+    /// An update whose losses turn non-finite (NaN returns) fails without touching the
+    /// network or the learning rate, whether the schedule reads each minibatch (adaptive) or
+    /// only the update's total (fixed); the rollout stays for another attempt.
+    #[test]
+    fn a_failed_update_leaves_the_policy_as_it_was() {
+        for schedule in [Schedule::Adaptive, Schedule::Fixed] {
+            let mut p = ppo(16, 4);
+            p.cfg.schedule = schedule;
+            rollout(&mut p);
+            p.storage.returns.fill(f32::NAN);
+            let probe = tensor2(vec![0.3, -0.2, 0.5], 1, 3, &p.device);
+            let outputs = |p: &Ppo| {
+                let m = p.model.valid();
+                (
+                    values(m.action_mean(probe.clone())),
+                    values(m.value(probe.clone())),
+                    values(m.action_std()),
+                )
+            };
+            let before = (outputs(&p), p.learning_rate);
+            assert!(matches!(p.update(), Err(RlError::NonFinite(_))));
+            assert_eq!((outputs(&p), p.learning_rate), before, "{schedule:?}");
+            assert_eq!(p.storage.step, 4, "the rollout is kept");
+        }
     }
 }
