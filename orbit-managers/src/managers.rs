@@ -246,8 +246,7 @@ impl ObservationManager {
     }
 
     pub(crate) fn compute(&mut self, env: &EnvView<'_>, noise: &mut EnvRngs) {
-        // A term reads only the env's state and writes only its own buffer: all terms are
-        // computed concurrently, under one wake-up of the thread pool.
+        before_concurrent_terms(env);
         self.groups.par_iter_mut().for_each(|g| {
             g.terms
                 .par_iter_mut()
@@ -297,6 +296,16 @@ impl ObservationManager {
             }
         }
     }
+}
+
+/// Prepares for computing a manager's terms concurrently (each reads only the env's state and
+/// writes only its own buffer, so their own loops over envs share the pool instead of
+/// following one another). The backend's state is made current first, on this thread: a
+/// backend that refreshes it lazily on first look (the GPU backend's host mirror, a parallel
+/// copy behind a `OnceLock`) must not do so inside the pool, where a worker waiting for the
+/// copy could pick up another term that waits for the same refresh.
+fn before_concurrent_terms(env: &EnvView<'_>) {
+    env.scene.backend.sync();
 }
 
 /// Adds a term's noise to one env's row, then clips and scales it (Isaac Lab's order).
@@ -388,8 +397,7 @@ impl RewardManager {
             reward.fill(0.0);
             return;
         }
-        // A term reads only the env's state and writes only its own buffer: all terms are
-        // computed concurrently, under one wake-up of the thread pool.
+        before_concurrent_terms(env);
         self.terms
             .par_iter_mut()
             .zip(self.values.par_iter_mut())

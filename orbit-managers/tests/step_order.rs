@@ -1,6 +1,8 @@
 //! The step and reset order of `ManagerBasedRlEnv` and `ManagerBasedEnv` as a contract (Isaac
 //! Lab's order, spec §1): probe terms of every kind append what they see to a per-thread log,
-//! and the tests compare the log with the order the spec prescribes.
+//! and the tests compare the log with the order the spec prescribes. The log is per thread, so
+//! each manager has one probe term: managers compute several terms concurrently, and a single
+//! term stays on the calling thread.
 
 use std::cell::RefCell;
 

@@ -262,7 +262,8 @@ impl Ppo {
         }
     }
 
-    /// The PPO update over the stored rollout; clears the storage.
+    /// The PPO update over the stored rollout; clears the storage. An update that fails leaves
+    /// the network, the optimiser, the learning rate and the rollout as they were.
     pub fn update(&mut self) -> Result<LossStats, RlError> {
         self.rollout_model = None;
         let cfg = self.cfg.clone();
@@ -281,7 +282,6 @@ impl Ppo {
             let j = ((u64::from(rng.next_u32()) * (i as u64 + 1)) >> 32) as usize;
             perm.swap(i, j);
         }
-        self.updates += 1;
         // A failed update leaves the network, the optimiser and the learning rate as they
         // were (tensors are shared, so this copies no weights).
         let before = (
@@ -311,7 +311,7 @@ impl Ppo {
                 });
             }
         }
-        let updates = (cfg.num_learning_epochs * cfg.num_mini_batches) as f32;
+        let steps = (cfg.num_learning_epochs * cfg.num_mini_batches) as f32;
         // One read for the whole update: a NaN in any minibatch's losses makes its sum NaN.
         let totals = values(totals.expect("an update has at least one minibatch"));
         let [value, surrogate, entropy] = totals[..] else {
@@ -321,20 +321,22 @@ impl Ppo {
             let e = RlError::NonFinite(format!(
                 "the PPO loss (mean value loss {}, surrogate {} over the update; learning rate \
                  {:.2e}; rollout {})",
-                value / updates,
-                surrogate / updates,
+                value / steps,
+                surrogate / steps,
                 self.learning_rate,
                 self.storage.extremes()
             ));
             return Err(self.restore(before, e));
         }
-        // Only now: an update that failed can be run again on the same rollout.
+        // Only now: an update that failed can be run again on the same rollout, with the same
+        // permutation.
+        self.updates += 1;
         self.storage.step = 0;
         self.step_obs.clear();
         Ok(LossStats {
-            value: value / updates,
-            surrogate: surrogate / updates,
-            entropy: entropy / updates,
+            value: value / steps,
+            surrogate: surrogate / steps,
+            entropy: entropy / steps,
         })
     }
 
@@ -965,9 +967,13 @@ mod tests {
                     values(m.action_std()),
                 )
             };
-            let before = (outputs(&p), p.learning_rate);
+            let before = (outputs(&p), p.learning_rate, p.updates);
             assert!(matches!(p.update(), Err(RlError::NonFinite(_))));
-            assert_eq!((outputs(&p), p.learning_rate), before, "{schedule:?}");
+            assert_eq!(
+                (outputs(&p), p.learning_rate, p.updates),
+                before,
+                "{schedule:?}"
+            );
             assert_eq!(p.storage.step, 4, "the rollout is kept");
         }
     }
