@@ -29,6 +29,19 @@ pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
 /// 4 096 envs' observations are scanned on one thread.
 const MIN_VALUES_PER_TASK: usize = 1 << 18;
 
+/// Copies `src` into `dst` (of the same length) on every core for large batches.
+pub fn copy(src: &[f32], dst: &mut [f32]) {
+    use rayon::prelude::*;
+    assert_eq!(
+        src.len(),
+        dst.len(),
+        "copy between batches of different sizes"
+    );
+    dst.par_chunks_mut(MIN_VALUES_PER_TASK)
+        .zip(src.par_chunks(MIN_VALUES_PER_TASK))
+        .for_each(|(d, s)| d.copy_from_slice(s));
+}
+
 /// Values per block of [`first_non_finite`]: a whole block is checked without branching, so
 /// that the check vectorises, and only a block found to hold a bad value is searched for it.
 const SCAN_BLOCK: usize = 1 << 12;

@@ -84,6 +84,28 @@ impl EmpiricalNormalizer {
         });
     }
 
+    /// Writes the normalised rows of `x` to `out` (the same values [`normalize`](Self::normalize)
+    /// gives in place, without a separate copy).
+    pub fn normalize_into(&self, x: &[f32], out: &mut [f32]) {
+        assert_eq!(
+            x.len(),
+            out.len(),
+            "input and output batches differ in size"
+        );
+        let divisors = self.divisors();
+        let d = self.dim();
+        out.par_chunks_mut(ROW_BLOCK * d)
+            .zip(x.par_chunks(ROW_BLOCK * d))
+            .for_each(|(out, x)| {
+                for (out, x) in out.chunks_exact_mut(d).zip(x.chunks_exact(d)) {
+                    for (((o, &v), &m), &s) in out.iter_mut().zip(x).zip(&self.mean).zip(&divisors)
+                    {
+                        *o = (v - m) / s;
+                    }
+                }
+            });
+    }
+
     /// Inverts [`normalize`](Self::normalize) in place: `x·(σ + ε) + μ`.
     pub fn denormalize(&self, x: &mut [f32]) {
         let divisors = self.divisors();
@@ -160,6 +182,24 @@ mod tests {
         assert_eq!(n.count, 5);
         n.denormalize(&mut x);
         assert!((x[0] - (5.0 + 8f32.sqrt())).abs() < 1e-5 && (x[1] - m1).abs() < 1e-5);
+    }
+
+    /// Normalising into a second buffer gives the bits of normalising in place, over several
+    /// row blocks.
+    #[test]
+    fn normalize_into_matches_in_place() {
+        let rows = 2 * ROW_BLOCK + 5;
+        let x: Vec<f32> = (0..rows * 3)
+            .map(|i| (i % 89) as f32 * 0.37 - 9.0)
+            .collect();
+        let mut n = EmpiricalNormalizer::new(3, u64::MAX);
+        n.update(&x);
+        let mut in_place = x.clone();
+        n.normalize(&mut in_place);
+        let mut out = vec![0.0; x.len()];
+        n.normalize_into(&x, &mut out);
+        assert_eq!(out, in_place);
+        assert!(out.iter().any(|&v| v != 0.0));
     }
 
     /// The statistics of a batch spanning several row blocks are the same bits on one thread

@@ -198,30 +198,34 @@ impl<E: VecEnv> OnPolicyRunner<E> {
     }
 
     /// Copies the env's current observations into `obs`/`critic_obs`, normalised (and, in
-    /// training, folded into the statistics).
+    /// training, folded into the statistics). Non-finite observations are an error that
+    /// changes nothing.
     fn observe(&mut self, update: bool) -> Result<(), RlError> {
         let (actor, critic) = (self.env.observations(), self.env.critic_observations());
-        self.critic_is_actor = !actor.is_empty()
+        let critic_is_actor = !actor.is_empty()
             && std::ptr::eq(actor, critic)
             && self.obs_normalizer.is_some() == self.critic_normalizer.is_some();
-        self.obs.copy_from_slice(actor);
-        check_finite("policy observation", &self.obs, self.env.num_obs())?;
-        if !self.critic_is_actor {
-            self.critic_obs.copy_from_slice(critic);
-            check_finite(
-                "critic observation",
-                &self.critic_obs,
-                self.env.num_critic_obs(),
-            )?;
+        check_finite("policy observation", actor, self.env.num_obs())?;
+        if !critic_is_actor {
+            check_finite("critic observation", critic, self.env.num_critic_obs())?;
         }
-        let critic =
-            (!self.critic_is_actor).then_some((&mut self.critic_normalizer, &mut self.critic_obs));
-        for (norm, x) in std::iter::once((&mut self.obs_normalizer, &mut self.obs)).chain(critic) {
-            if let Some(n) = norm {
-                if update {
-                    n.update(x);
+        self.critic_is_actor = critic_is_actor;
+        let critic = (!critic_is_actor).then_some((
+            &mut self.critic_normalizer,
+            critic,
+            &mut self.critic_obs,
+        ));
+        let actor = (&mut self.obs_normalizer, actor, &mut self.obs);
+        // Read from the env's buffers and written once, normalised: no separate copy.
+        for (norm, x, out) in std::iter::once(actor).chain(critic) {
+            match norm {
+                Some(n) => {
+                    if update {
+                        n.update(x);
+                    }
+                    n.normalize_into(x, out);
                 }
-                n.normalize(x);
+                None => orbit_core::parallel::copy(x, out),
             }
         }
         Ok(())

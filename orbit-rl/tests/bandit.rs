@@ -18,6 +18,9 @@ struct Bandit {
     dones: Vec<bool>,
     time_outs: Vec<bool>,
     log: BTreeMap<String, f32>,
+    /// Steps taken, and the step after which env 1's first observation is NaN.
+    steps: usize,
+    nan_after: Option<usize>,
 }
 
 impl Bandit {
@@ -30,6 +33,8 @@ impl Bandit {
             dones: vec![true; n],
             time_outs: vec![false; n],
             log: BTreeMap::new(),
+            steps: 0,
+            nan_after: None,
         };
         b.draw();
         b
@@ -79,6 +84,10 @@ impl VecEnv for Bandit {
                 .sum::<f32>();
         }
         self.draw();
+        self.steps += 1;
+        if self.nan_after == Some(self.steps) {
+            self.obs[2] = f32::NAN;
+        }
         Ok(VecEnvStep {
             rewards: &self.rewards,
             dones: &self.dones,
@@ -151,4 +160,20 @@ fn a_critic_sharing_the_actor_observations_trains_the_same() {
     let shared = train(Bandit::new(64));
     let separate = train(Bandit::new(64).with_separate_critic());
     assert_eq!(shared, separate);
+}
+
+/// A NaN observation stops training with an error that names the env and the entry.
+#[test]
+fn a_nan_observation_is_an_error_naming_env_and_entry() {
+    let cfg =
+        RunnerCfg::from_ron(CFG, "bandit.ron", &["empirical_normalization=true".into()]).unwrap();
+    let mut env = Bandit::new(4);
+    env.nan_after = Some(3);
+    let mut runner = OnPolicyRunner::new(env, cfg, None, Device::flex()).unwrap();
+    match runner.learn(1) {
+        Err(RlError::NonFinite(msg)) => {
+            assert!(msg.contains("env 1's policy observation 0"), "{msg}")
+        }
+        other => panic!("expected a NonFinite error, got {other:?}"),
+    }
 }
