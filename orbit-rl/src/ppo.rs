@@ -56,8 +56,8 @@ pub struct Ppo {
     rollout_model: Option<ActorCritic>,
     /// The actor and critic observations of each stored step, as the tensors the forward pass
     /// took (already on the device: the update concatenates them instead of uploading the
-    /// rollout's observations again).
-    step_obs: Vec<(Tensor<2>, Tensor<2>)>,
+    /// rollout's observations again); no critic tensor where the critic saw the actor's.
+    step_obs: Vec<(Tensor<2>, Option<Tensor<2>>)>,
     /// The action standard deviation during the current rollout.
     sigma: Vec<f32>,
     updates: u32,
@@ -164,19 +164,18 @@ impl Ppo {
         self.step_obs.truncate(t);
         let device = self.device.clone();
         let actor_input = tensor2(obs.to_vec(), n, no, &device);
-        // The same values (an env without a `critic` group): uploaded once.
-        let critic_input = if std::ptr::eq(obs, critic_obs) {
-            actor_input.clone()
-        } else {
-            tensor2(critic_obs.to_vec(), n, nc, &device)
-        };
+        // The same values (an env without a `critic` group): uploaded, and later
+        // concatenated, once.
+        let critic_input =
+            (!std::ptr::eq(obs, critic_obs)).then(|| tensor2(critic_obs.to_vec(), n, nc, &device));
+        let critic_view = critic_input.clone().unwrap_or_else(|| actor_input.clone());
         let inputs = (actor_input, critic_input);
         let model = self.rollout_model();
         // Means and values come back in one read (each read waits for the device).
         let out = values(Tensor::cat(
             vec![
                 model.action_mean(inputs.0.clone()),
-                model.value(inputs.1.clone()),
+                model.value(critic_view),
             ],
             1,
         ));
@@ -301,10 +300,7 @@ impl Ppo {
         for _ in 0..cfg.num_learning_epochs {
             for k in 0..cfg.num_mini_batches {
                 let batch = rollout.select(&perm[k * m..(k + 1) * m], &self.device);
-                let losses = match self.step_minibatch(batch) {
-                    Ok(losses) => losses,
-                    Err(e) => return Err(self.restore(before, e)),
-                };
+                let losses = self.step_minibatch(batch);
                 totals = Some(match totals {
                     Some(t) => t + losses,
                     None => losses,
@@ -326,7 +322,8 @@ impl Ppo {
                 self.learning_rate,
                 self.storage.extremes()
             ));
-            return Err(self.restore(before, e));
+            (self.model, self.optimizer, self.learning_rate) = before;
+            return Err(e);
         }
         // Only now: an update that failed can be run again on the same rollout, with the same
         // permutation.
@@ -338,19 +335,6 @@ impl Ppo {
             surrogate: surrogate / steps,
             entropy: entropy / steps,
         })
-    }
-
-    /// Puts back the network, optimiser and learning rate from before a failed update, and
-    /// passes its error on.
-    fn restore(
-        &mut self,
-        (model, optimizer, lr): (ActorCritic, ModuleOptimizer, f64),
-        e: RlError,
-    ) -> RlError {
-        self.model = model;
-        self.optimizer = optimizer;
-        self.learning_rate = lr;
-        e
     }
 
     /// The losses of a minibatch under the current network, and the KL divergence from the
@@ -371,6 +355,7 @@ impl Ppo {
         } = mb;
         let old_sigma = tensor1(s.sigma.clone(), &self.device).reshape([1, na]);
 
+        let critic_obs = critic_obs.unwrap_or_else(|| obs.clone());
         let mu = self.model.action_mean(obs);
         let sigma = self.model.action_std().reshape([1, na]);
         let log_sigma_sum = sigma.clone().log().sum();
@@ -422,10 +407,10 @@ impl Ppo {
     }
 
     /// One gradient step on a minibatch. Returns its value, surrogate and entropy losses as a
-    /// `[3]` tensor, left on the device. With the fixed schedule the step never waits for the
-    /// device: the gradient clipping is computed there too. The adaptive schedule needs the
-    /// KL before the step, so it reads it (with the losses, checked here) once per minibatch.
-    fn step_minibatch(&mut self, mb: Minibatch) -> Result<Tensor<1>, RlError> {
+    /// `[3]` tensor, left on the device (the update checks their sum). With the fixed schedule
+    /// the step never waits for the device: the gradient clipping is computed there too. The
+    /// adaptive schedule needs the KL before the step, so it reads it once per minibatch.
+    fn step_minibatch(&mut self, mb: Minibatch) -> Tensor<1> {
         let l = self.minibatch_losses(mb);
         let cfg = &self.cfg;
         let loss = l.surrogate.clone() + l.value.clone().mul_scalar(cfg.value_loss_coef)
@@ -436,18 +421,8 @@ impl Ppo {
             0,
         );
         if cfg.schedule == Schedule::Adaptive {
-            let read = values(Tensor::cat(vec![l.kl, losses.clone()], 0));
-            let [kl, value, surrogate, _] = read[..] else {
-                unreachable!("four scalars were concatenated")
-            };
-            if !(value.is_finite() && surrogate.is_finite()) {
-                return Err(RlError::NonFinite(format!(
-                    "the PPO loss (value {value}, surrogate {surrogate}, KL {kl}, learning \
-                     rate {:.2e}; rollout {})",
-                    self.learning_rate,
-                    self.storage.extremes()
-                )));
-            }
+            // A NaN KL changes nothing here; the update then fails on its losses.
+            let kl = l.kl.into_scalar::<f32>();
             let desired = cfg.desired_kl;
             if kl > 2.0 * desired {
                 self.learning_rate = (self.learning_rate / 1.5).max(1e-5);
@@ -458,7 +433,7 @@ impl Ppo {
         clip_gradients(&self.model, &mut grads, cfg.grad_clip, cfg.max_grad_norm);
         let model = self.model.clone();
         self.model = self.optimizer.step(self.learning_rate, model, grads);
-        Ok(losses)
+        losses
     }
 
     /// Saves the network and the optimiser state as burnpack files `<base>.bpk` and
@@ -596,7 +571,8 @@ struct MinibatchLosses {
 /// gather and upload each minibatch on the host), or one minibatch of it.
 struct Minibatch {
     obs: Tensor<2>,
-    critic_obs: Tensor<2>,
+    /// `None`: the critic observes `obs`.
+    critic_obs: Option<Tensor<2>>,
     actions: Tensor<2>,
     mu: Tensor<2>,
     log_prob: Tensor<1>,
@@ -607,12 +583,12 @@ struct Minibatch {
 
 impl Minibatch {
     /// Uploads the storage, with the observations of its steps given as tensors (`step_obs`,
-    /// actor and critic, one pair per step). With `per_minibatch` the advantages are
+    /// actor and critic, one pair per step; no critic tensor where it saw the actor's). With `per_minibatch` the advantages are
     /// normalised within each minibatch of `perm` (chunks of `m`): the permutation is the same
     /// in every epoch, so this is done once, here.
     fn upload(
         s: &RolloutStorage,
-        step_obs: &[(Tensor<2>, Tensor<2>)],
+        step_obs: &[(Tensor<2>, Option<Tensor<2>>)],
         perm: &[usize],
         m: usize,
         per_minibatch: bool,
@@ -624,7 +600,13 @@ impl Minibatch {
             s.num_steps,
             "the update needs the observations of every step"
         );
-        let (obs, critic_obs): (Vec<_>, Vec<_>) = step_obs.iter().cloned().unzip();
+        let obs = step_obs.iter().map(|(a, _)| a.clone()).collect();
+        let critic_obs = step_obs.iter().any(|(_, c)| c.is_some()).then(|| {
+            let steps = step_obs
+                .iter()
+                .map(|(a, c)| c.clone().unwrap_or_else(|| a.clone()));
+            Tensor::cat(steps.collect(), 0)
+        });
         let mut advantages = s.advantages.clone();
         if per_minibatch {
             for chunk in perm.chunks_exact(m) {
@@ -637,7 +619,7 @@ impl Minibatch {
         }
         Self {
             obs: Tensor::cat(obs, 0),
-            critic_obs: Tensor::cat(critic_obs, 0),
+            critic_obs,
             actions: tensor2(s.actions.clone(), b, s.num_actions, device),
             mu: tensor2(s.mu.clone(), b, s.num_actions, device),
             log_prob: tensor1(s.actions_log_prob.clone(), device),
@@ -654,7 +636,10 @@ impl Minibatch {
         let idx = Tensor::<1, Int>::from_data(TensorData::new(idx, [rows]), device);
         Self {
             obs: self.obs.clone().select(0, idx.clone()),
-            critic_obs: self.critic_obs.clone().select(0, idx.clone()),
+            critic_obs: self
+                .critic_obs
+                .as_ref()
+                .map(|c| c.clone().select(0, idx.clone())),
             actions: self.actions.clone().select(0, idx.clone()),
             mu: self.mu.clone().select(0, idx.clone()),
             log_prob: self.log_prob.clone().select(0, idx.clone()),
@@ -949,8 +934,9 @@ mod tests {
     }
 
     /// An update whose losses turn non-finite (NaN returns) fails without touching the
-    /// network or the learning rate, whether the schedule reads each minibatch (adaptive) or
-    /// only the update's total (fixed); the rollout stays for another attempt.
+    /// network, the learning rate or the shuffle, under either schedule (the adaptive one reads
+    /// a KL per minibatch, the fixed one nothing until the update's losses); the rollout stays
+    /// for another attempt.
     #[test]
     fn a_failed_update_leaves_the_policy_as_it_was() {
         for schedule in [Schedule::Adaptive, Schedule::Fixed] {
