@@ -26,7 +26,6 @@ use orbit_core::physics::{
     check_values,
 };
 use orbit_core::scene::{RootState, SceneDesc};
-use rayon::prelude::*;
 
 pub use compile::{MAX_CONTACTS, MAX_DOFS, MAX_LINKS, default_solver_iterations};
 pub use gpu::{Gpu, gpu};
@@ -379,14 +378,8 @@ impl WgpuBackend {
                 .unwrap_or_else(|e| panic!("reading the physics state back failed: {e}"));
             let len = self.buffers.state_len;
             let state: &mut [f32] = bytemuck::cast_slice_mut(dst);
-            let src: &[f32] = bytemuck::cast_slice(&view);
-            // Tens of megabytes at 65 536 envs: copy on every core, in 4 MB pieces (a few
-            // thousand envs' state is copied on one thread, cheaper than waking the others).
-            const CHUNK: usize = 1 << 20;
-            state[..len]
-                .par_chunks_mut(CHUNK)
-                .zip(src.par_chunks(CHUNK))
-                .for_each(|(to, from)| to.copy_from_slice(from));
+            // Tens of megabytes at 65 536 envs: copied on every core.
+            orbit_core::parallel::copy(bytemuck::cast_slice(&view), &mut state[..len]);
         }
         self.staging.unmap();
     }
