@@ -7,7 +7,7 @@
 //! cargo run --release --example runner_overhead -- --num-envs 4096,65536
 //! ```
 //!
-//! The sizes default to box pushing's (28 observations, 7 actions, 24 steps per iteration).
+//! The sizes default to box pushing's (35 observations, 7 actions, 24 steps per iteration).
 //! The policy runs on the CPU learner; its time is reported but is not what this measures.
 
 use std::collections::BTreeMap;
@@ -23,7 +23,7 @@ struct Args {
     #[arg(long, value_delimiter = ',', default_value = "4096,65536")]
     num_envs: Vec<usize>,
     /// Observations per env.
-    #[arg(long, default_value_t = 28)]
+    #[arg(long, default_value_t = 35)]
     num_obs: usize,
     /// Actions per env.
     #[arg(long, default_value_t = 7)]
