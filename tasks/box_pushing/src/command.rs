@@ -1,6 +1,6 @@
 //! The target-pose command: Fancy Gym's `sample_context` with its minimum-distance rule.
 
-use orbit_core::math::{quat_wxyz, rotation_distance};
+use orbit_core::math::rotation_distance;
 use orbit_core::parallel::MIN_ENVS_PER_TASK;
 use orbit_core::scene::{Marker, MarkerShape};
 use orbit_managers::mdp::command_pose;
@@ -83,8 +83,9 @@ impl CommandTerm for TargetPose {
             .zip(self.command.par_chunks(7))
             .enumerate()
             .for_each(|(e, (((d, rho), ok), c))| {
-                *d = (objects.pos[e] - glam::Vec3::new(c[0], c[1], c[2])).length();
-                *rho = rotation_distance(objects.quat[e], quat_wxyz([c[3], c[4], c[5], c[6]]));
+                let target = command_pose(c);
+                *d = (objects.pos[e] - target.pos).length();
+                *rho = rotation_distance(objects.quat[e], target.rot);
                 *ok = f32::from(u8::from(*d <= SUCCESS_DISTANCE && *rho <= SUCCESS_ANGLE));
             });
     }
