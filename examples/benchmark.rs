@@ -12,14 +12,17 @@
 //! column reads the state only after the last step (a GPU backend then pipelines the steps and
 //! reads nothing back in between); the next column reads the joint positions after every step,
 //! as an env does, which on the GPU waits for each step and copies the state back. The kernel
-//! columns come from GPU timestamps around the step kernel. The full-env column steps the registered task with
-//! the same kind of actions; its `managers / physics` ratio and the per-phase table come from the
-//! env's own step timings.
+//! columns come from GPU timestamps around the step kernel. The full-env column steps the
+//! registered task with the same kind of actions; its `managers / physics` ratio and the
+//! per-phase table come from the env's own step timings. `--actions gaussian` and
+//! `--staggered` make that column's load training's: random actions as an untrained policy
+//! takes, and episodes that end at different steps, so that some envs reset every step.
 
 use std::time::Instant;
 
 use clap::Parser;
 use orbit::core::physics::{SimCfg, build_backend};
+use orbit::core::rng::EnvRng;
 use orbit::managers::StepTimings;
 
 #[derive(Parser)]
@@ -49,40 +52,96 @@ struct Args {
     /// Scene config overrides `key.path=value`.
     #[arg(long = "set")]
     overrides: Vec<String>,
+    /// Actions of the full-env column: small sines (the arm stays near its start and the rod
+    /// in the box), or standard-normal noise per env and joint, as an untrained policy with
+    /// initial noise std 1.0 acts (the arm sweeps the table: more contacts per env).
+    #[arg(long, value_enum, default_value = "sine")]
+    actions: EnvActions,
+    /// Stagger the full env's episodes (env `e` starts at step `e mod max_episode_length`, as
+    /// training does), so that some envs reset every step instead of all at once.
+    #[arg(long)]
+    staggered: bool,
 }
 
-/// Seconds for `args.steps` steps of the full manager-based env (`--task`) with the same
-/// sinusoidal actions (after 20 warm-up steps), and the env's own per-phase timings of them.
-fn full_env_seconds(
-    args: &Args,
-    n: usize,
-) -> Result<(f64, StepTimings), Box<dyn std::error::Error>> {
+/// How the full-env column chooses its actions.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum EnvActions {
+    /// `0.03·sin(πt + j)` for joint `j`, the same in every env.
+    Sine,
+    /// Independent standard-normal actions per env, joint and step (seeded, deterministic).
+    Gaussian,
+}
+
+/// The full env's figures for one env count.
+struct FullEnv {
+    /// Seconds for `args.steps` steps.
+    secs: f64,
+    /// The env's own per-phase timings of those steps.
+    timings: StepTimings,
+    /// The step kernel's mean GPU time per env step, from a second pass of as many steps that
+    /// reads the GPU timestamps after each (None on a backend without them).
+    kernel: Option<std::time::Duration>,
+}
+
+/// Steps the full manager-based env (`--task`) with the actions `--actions` chooses: 20
+/// warm-up steps, `args.steps` timed ones, then as many reading the kernel's GPU time.
+fn full_env(args: &Args, n: usize) -> Result<FullEnv, Box<dyn std::error::Error>> {
     let mut overrides = orbit::run_overrides(Some(n), None, Some(&args.backend), &[]);
     overrides.push(format!("sim.num_threads={}", args.threads));
     overrides.push(format!("sim.solver_iterations={}", args.solver_iterations));
     overrides.push(format!("decimation={}", args.decimation));
     let mut env = orbit::make(&args.task, &overrides)?;
     env.reset()?;
+    if args.staggered {
+        let max = env.max_episode_length();
+        env.set_episode_length(&(0..n as u32).map(|e| e % max).collect::<Vec<_>>())?;
+    }
     let d = env.action_dim();
     let mut action = vec![0.0f32; n * d];
+    let mut rngs: Vec<EnvRng> = (0..n as u32).map(|e| EnvRng::new(7, e, 0)).collect();
     let mut run = |env: &mut orbit::managers::ManagerBasedRlEnv,
                    steps: usize,
-                   t0: usize|
+                   t0: usize,
+                   kernel: &mut Option<std::time::Duration>|
      -> Result<(), Box<dyn std::error::Error>> {
         for k in t0..t0 + steps {
             let t = k as f32 * 0.02;
-            for (i, a) in action.iter_mut().enumerate() {
-                *a = 0.03 * (2.0 * std::f32::consts::PI * 0.5 * t + (i % d) as f32).sin();
+            match args.actions {
+                EnvActions::Sine => {
+                    for (i, a) in action.iter_mut().enumerate() {
+                        *a = 0.03 * (2.0 * std::f32::consts::PI * 0.5 * t + (i % d) as f32).sin();
+                    }
+                }
+                EnvActions::Gaussian => {
+                    for (row, rng) in action.chunks_exact_mut(d).zip(&mut rngs) {
+                        row.iter_mut().for_each(|a| *a = rng.normal());
+                    }
+                }
             }
             env.step(&action)?;
+            if let Some(k) = kernel
+                && let Some(t) = env.scene().backend.last_kernel_time()
+            {
+                *k += t;
+            }
         }
         Ok(())
     };
-    run(&mut env, 20, 0)?;
+    run(&mut env, 20, 0, &mut None)?;
     env.timings_mut().clear();
     let start = Instant::now();
-    run(&mut env, args.steps, 20)?;
-    Ok((start.elapsed().as_secs_f64(), *env.timings()))
+    run(&mut env, args.steps, 20, &mut None)?;
+    let (secs, timings) = (start.elapsed().as_secs_f64(), *env.timings());
+    let mut kernel = Some(std::time::Duration::ZERO);
+    run(&mut env, args.steps, 20 + args.steps, &mut kernel)?;
+    let kernel = kernel
+        .filter(|k| !k.is_zero())
+        .map(|k| k / args.steps as u32);
+    Ok(FullEnv {
+        secs,
+        timings,
+        kernel,
+    })
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -166,7 +225,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let read_rate = (n * args.steps) as f64 / read_secs;
         let memory = backend.device_memory_bytes() as f64 / n as f64;
         drop(backend);
-        let (env_secs, timings) = full_env_seconds(&args, n)?;
+        let FullEnv {
+            secs: env_secs,
+            timings,
+            kernel: env_kernel,
+        } = full_env(&args, n)?;
         let env_rate = (n * args.steps) as f64 / env_secs;
         let overhead = timings.managers().as_secs_f64() / timings.physics.as_secs_f64();
         let kernel_ms = kernel.map_or("—".to_string(), |k| {
@@ -181,7 +244,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             overhead * 100.0,
             memory
         );
-        phases.push((n, timings));
+        phases.push((n, timings, env_kernel));
     }
     // Where a full env step's time goes, measured inside the env (same runs as above).
     println!();
@@ -190,16 +253,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .map(|p| p.0)
         .collect();
-    println!("µs per env step by phase (full env):");
-    println!("| envs | {} |", names.join(" | "));
-    println!("|-----:|{}", "-----:|".repeat(names.len()));
-    for (n, t) in phases {
+    println!("µs per env step by phase (full env; the kernel's GPU time is part of the physics):");
+    println!("| envs | {} | kernel |", names.join(" | "));
+    println!("|-----:|{}", "-----:|".repeat(names.len() + 1));
+    for (n, t, kernel) in phases {
         let cells: Vec<String> = t
             .phases()
             .iter()
             .map(|(_, d)| format!("{:.1}", d.as_secs_f64() * 1e6 / t.steps as f64))
             .collect();
-        println!("| {n:>4} | {} |", cells.join(" | "));
+        let kernel = kernel.map_or("—".into(), |k| format!("{:.1}", k.as_secs_f64() * 1e6));
+        println!("| {n:>4} | {} | {kernel} |", cells.join(" | "));
     }
     Ok(())
 }
