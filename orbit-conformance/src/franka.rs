@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
-use orbit_core::physics::PhysicsBackend;
+use orbit_core::physics::{BodyRef, PhysicsBackend};
 use orbit_core::scene::{PerJoint, SceneCfg};
 use serde::Deserialize;
 
@@ -435,7 +435,9 @@ pub fn resets_leave_other_envs_untouched(backend: &str) {
 /// A reset env forgets its past: after 5 steps in which the box slides over the table (contacts
 /// with friction impulses, which the solver warm-starts from), the arm and the box are written
 /// back to a state (the default joints, the box settled on the table, at rest); the env then
-/// follows the same trajectory, bit for bit, as one that starts from that state.
+/// follows the same trajectory, bit for bit, as one that starts from that state. It keeps what
+/// is not state: the box's and the hand's masses and the box's friction, set before its history
+/// (and shown to change the trajectory).
 pub fn a_reset_env_forgets_its_past(backend: &str) {
     a_reset_env_forgets_its_past_with(&sim_cfg(backend));
 }
@@ -445,7 +447,30 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
     let scene = resolve(&box_pushing_scene_cfg());
     let backend = &settings.backend;
     let arm = &scene.articulations[0];
-    let build = || orbit_core::physics::build_backend(&scene, 1, settings).expect("build");
+    let build = |randomised: bool| {
+        let mut sim = orbit_core::physics::build_backend(&scene, 1, settings).expect("build");
+        if randomised {
+            // The last link with a mass: the hand with the rod.
+            let link = (arm.model.links.iter())
+                .rposition(|l| l.inertial.mass > 0.0)
+                .expect("a link with mass");
+            let (box_, hand) = (
+                BodyRef::RigidObject(0),
+                BodyRef::Link {
+                    articulation: 0,
+                    link,
+                },
+            );
+            let box_mass = scene.rigid_objects[0].body.inertial.mass;
+            let hand_mass = arm.model.links[link].inertial.mass;
+            sim.set_masses(box_, &[0], &[1.5 * box_mass])
+                .expect("box mass");
+            sim.set_masses(hand, &[0], &[1.3 * hand_mass])
+                .expect("hand mass");
+            sim.set_friction(box_, &[0], &[0.2]).expect("box friction");
+        }
+        sim
+    };
     // Steps with the bias forces plus `efforts(k)` as joint efforts.
     let run = |sim: &mut Box<dyn PhysicsBackend>, ks: std::ops::Range<usize>, scale: f32| {
         for k in ks {
@@ -458,7 +483,7 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
         }
     };
     let settled = {
-        let mut sim = build();
+        let mut sim = build(false);
         run(&mut sim, 0..20, 0.0);
         let o = sim.rigid_object(0);
         orbit_core::scene::RootState {
@@ -466,8 +491,8 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
             ..Default::default()
         }
     };
-    let trajectory = |history: bool| {
-        let mut sim = build();
+    let trajectory = |history: bool, randomised: bool| {
+        let mut sim = build(randomised);
         if history {
             // The box slides over the table: its contacts carry friction impulses when the
             // reset comes.
@@ -503,7 +528,12 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
         }
         states
     };
-    let (fresh, reset) = (trajectory(false), trajectory(true));
+    let (fresh, reset) = (trajectory(false, true), trajectory(true, true));
+    assert_ne!(
+        fresh,
+        trajectory(false, false),
+        "the masses and the friction change the trajectory"
+    );
     for (k, (f, r)) in fresh.iter().zip(&reset).enumerate() {
         assert_eq!(f, r, "step {k} after the reset differs from a fresh start");
     }

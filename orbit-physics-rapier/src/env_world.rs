@@ -7,7 +7,7 @@
 use glam::{Quat, Vec3};
 use orbit_core::kinematics::ArticulationKinematics;
 use orbit_core::math::Pose as OrbitPose;
-use orbit_core::physics::{PhysicsError, SimCfg};
+use orbit_core::physics::{BodyRef, PhysicsError, SimCfg};
 use orbit_core::scene::{
     ArticulationDesc, Geometry, Inertial, JointDrive, JointKind, RigidBodyModel, RootState,
     SceneDesc, Shape,
@@ -572,8 +572,21 @@ impl EnvWorld {
             com: inertial.com,
             inertia: inertial.inertia * scale,
         };
-        self.world.bodies[handle].set_additional_mass_properties(mass_props(&new), true);
+        self.set_inertial(handle, &new);
         new
+    }
+
+    /// The rigid body of `body` (an index already checked by the backend).
+    pub fn body(&self, body: BodyRef) -> RigidBodyHandle {
+        match body {
+            BodyRef::Link { articulation, link } => self.arts[articulation].links[link],
+            BodyRef::RigidObject(o) => self.objects[o],
+        }
+    }
+
+    /// Gives a body the mass properties `inertial`.
+    pub fn set_inertial(&mut self, handle: RigidBodyHandle, inertial: &Inertial) {
+        self.world.bodies[handle].set_additional_mass_properties(mass_props(inertial), true);
     }
 
     /// Sets the friction of every collider of a body.

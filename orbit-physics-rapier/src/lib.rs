@@ -15,6 +15,7 @@ mod env_world;
 mod hooks;
 
 use glam::{Quat, Vec3};
+use orbit_core::math::Pose;
 use orbit_core::physics::{
     ArticulationView, BackendRegistration, BodyRef, PhysicsBackend, PhysicsError, RigidObjectView,
     SceneLayout, SimCfg, check_batch, check_dof_ids, check_env_ids, check_root_states,
@@ -73,10 +74,23 @@ struct ObjectBuffers {
 pub struct RapierBackend {
     layout: SceneLayout,
     sim: SimCfg,
+    /// The scene, from which an env's world is built anew when its state is written.
+    scene: SceneDesc,
     envs: Vec<EnvWorld>,
+    /// Per env: its world has not been stepped since it was built, so it holds no contacts.
+    unstepped: Vec<bool>,
+    /// Per env: the frictions set on its bodies, reapplied when its world is built anew.
+    frictions: Vec<Vec<(BodyRef, f32)>>,
     arts: Vec<ArticulationBuffers>,
     objects: Vec<ObjectBuffers>,
     pool: rayon::ThreadPool,
+}
+
+/// The part of an env's state that a write replaces (the rest is carried into a new world).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Written {
+    Articulation(usize),
+    Object(usize),
 }
 
 impl RapierBackend {
@@ -144,7 +158,10 @@ impl RapierBackend {
         let mut backend = Self {
             layout: SceneLayout::from_desc(scene),
             sim: sim.clone(),
+            scene: scene.clone(),
             envs,
+            unstepped: vec![true; num_envs],
+            frictions: vec![Vec::new(); num_envs],
             arts,
             objects,
             pool,
@@ -152,6 +169,71 @@ impl RapierBackend {
         let all: Vec<usize> = (0..num_envs).collect();
         backend.publish(&all);
         Ok(backend)
+    }
+
+    /// Builds the worlds of the listed envs anew before a write of `written`, so that the
+    /// write starts a fresh history: rapier keeps each contact pair's impulses from step to step
+    /// to warm-start its solver, and a reset env must not start its episode with the last
+    /// one's. Everything else carries over: the published state (all but `written`), masses and
+    /// frictions. An env not stepped since its world was built is left as it is.
+    fn renew(&mut self, env_ids: &[usize], written: Written) -> Result<(), PhysicsError> {
+        let stale: Vec<usize> = env_ids
+            .iter()
+            .copied()
+            .filter(|&e| !self.unstepped[e])
+            .collect();
+        if stale.is_empty() {
+            return Ok(());
+        }
+        let this = &*self;
+        let worlds = self.pool.install(|| {
+            stale
+                .par_iter()
+                .map(|&e| this.rebuilt(e, written))
+                .collect::<Result<Vec<_>, _>>()
+        })?;
+        for (e, world) in stale.into_iter().zip(worlds) {
+            self.envs[e] = world;
+            self.unstepped[e] = true;
+        }
+        Ok(())
+    }
+
+    /// A new world for env `e` in its published state (but for `written`), with its masses and
+    /// frictions.
+    fn rebuilt(&self, e: usize, written: Written) -> Result<EnvWorld, PhysicsError> {
+        let mut env = EnvWorld::build(&self.scene, &self.sim)?;
+        for (a, b) in self.arts.iter().enumerate() {
+            let links = &self.scene.articulations[a].model.links;
+            for (l, link) in links.iter().enumerate() {
+                let inertial = b.inertials[e * b.links + l];
+                if inertial != link.inertial {
+                    env.set_inertial(env.arts[a].links[l], &inertial);
+                    env.arts[a].kin.set_inertial(l, inertial);
+                }
+            }
+            if written != Written::Articulation(a) {
+                let r = e * b.dofs..(e + 1) * b.dofs;
+                env.write_joint_state(a, &b.joint_pos[r.clone()], &b.joint_vel[r]);
+            }
+        }
+        for (o, b) in self.objects.iter().enumerate() {
+            if b.inertials[e] != self.scene.rigid_objects[o].body.inertial {
+                env.set_inertial(env.objects[o], &b.inertials[e]);
+            }
+            if written != Written::Object(o) {
+                let state = RootState {
+                    pose: Pose::new(b.pos[e], b.quat[e]),
+                    lin_vel: b.lin_vel[e],
+                    ang_vel: b.ang_vel[e],
+                };
+                env.write_root_state(o, &state);
+            }
+        }
+        for &(body, friction) in &self.frictions[e] {
+            env.set_friction(env.body(body), friction);
+        }
+        Ok(env)
     }
 
     /// Input rows of env `e` for every articulation (no allocation: fixed-size array).
@@ -306,6 +388,7 @@ impl PhysicsBackend for RapierBackend {
         for e in all {
             self.gather(std::slice::from_ref(&e));
         }
+        self.unstepped.fill(false);
         Ok(())
     }
 
@@ -378,6 +461,7 @@ impl PhysicsBackend for RapierBackend {
         check_env_ids(env_ids, self.envs.len())?;
         check_batch("joint positions", pos, env_ids.len(), dofs)?;
         check_batch("joint velocities", vel, env_ids.len(), dofs)?;
+        self.renew(env_ids, Written::Articulation(a))?;
         for (i, &e) in env_ids.iter().enumerate() {
             let r = i * dofs..(i + 1) * dofs;
             self.envs[e].write_joint_state(a, &pos[r.clone()], &vel[r]);
@@ -395,6 +479,7 @@ impl PhysicsBackend for RapierBackend {
         self.body_handle(BodyRef::RigidObject(o))?;
         check_env_ids(env_ids, self.envs.len())?;
         check_root_states(states, env_ids.len())?;
+        self.renew(env_ids, Written::Object(o))?;
         for (&e, s) in env_ids.iter().zip(states) {
             self.envs[e].write_root_state(o, s);
         }
@@ -412,19 +497,17 @@ impl PhysicsBackend for RapierBackend {
         check_env_ids(env_ids, self.envs.len())?;
         check_values("masses", masses, env_ids.len(), "> 0", |m| m > 0.0)?;
         for (&e, &m) in env_ids.iter().zip(masses) {
+            let env = &mut self.envs[e];
+            let handle = env.body(body);
             match body {
                 BodyRef::Link { articulation, link } => {
                     let b = &mut self.arts[articulation];
                     let slot = &mut b.inertials[e * b.links + link];
-                    let env = &mut self.envs[e];
-                    let handle = env.arts[articulation].links[link];
                     *slot = env.set_mass(handle, slot, m);
                     env.arts[articulation].kin.set_inertial(link, *slot);
                 }
                 BodyRef::RigidObject(o) => {
                     let slot = &mut self.objects[o].inertials[e];
-                    let env = &mut self.envs[e];
-                    let handle = env.objects[o];
                     *slot = env.set_mass(handle, slot, m);
                 }
             }
@@ -443,11 +526,12 @@ impl PhysicsBackend for RapierBackend {
         check_values("friction", friction, env_ids.len(), ">= 0", |f| f >= 0.0)?;
         for (&e, &f) in env_ids.iter().zip(friction) {
             let env = &mut self.envs[e];
-            let handle = match body {
-                BodyRef::Link { articulation, link } => env.arts[articulation].links[link],
-                BodyRef::RigidObject(o) => env.objects[o],
-            };
-            env.set_friction(handle, f);
+            env.set_friction(env.body(body), f);
+            let set = &mut self.frictions[e];
+            match set.iter_mut().find(|(b, _)| *b == body) {
+                Some(entry) => entry.1 = f,
+                None => set.push((body, f)),
+            }
         }
         Ok(())
     }

@@ -56,3 +56,8 @@ fn deterministic_runs() {
 fn resets_leave_other_envs_untouched() {
     orbit_conformance::resets_leave_other_envs_untouched(BACKEND_NAME);
 }
+
+#[test]
+fn a_reset_env_forgets_its_past() {
+    orbit_conformance::a_reset_env_forgets_its_past(BACKEND_NAME);
+}
