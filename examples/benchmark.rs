@@ -79,7 +79,9 @@ struct FullEnv {
     /// The env's own per-phase timings of those steps.
     timings: StepTimings,
     /// The step kernel's mean GPU time per env step, from a second pass of as many steps that
-    /// reads the GPU timestamps after each (None on a backend without them).
+    /// reads the GPU timestamps after each (None on a backend without them). The timestamps
+    /// cover an env step's last dispatch: the whole step when the env runs its substeps as one
+    /// (actions fixed within a step, as box pushing's are), else only the last substep.
     kernel: Option<std::time::Duration>,
 }
 

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
 use orbit_core::physics::{BodyRef, PhysicsBackend};
-use orbit_core::scene::{PerJoint, SceneCfg};
+use orbit_core::scene::{PerJoint, SceneCfg, SceneDesc};
 use serde::Deserialize;
 
 use crate::scenes::{build, build_with, resolve, sim_cfg};
@@ -432,12 +432,118 @@ pub fn resets_leave_other_envs_untouched(backend: &str) {
     );
 }
 
+/// Which of an env's parameters [`randomise`] changes.
+#[derive(Clone, Copy, Debug)]
+struct Parameters {
+    /// The box's mass, × 1.5.
+    box_mass: bool,
+    /// The hand's mass (the last link with a mass: the hand with the rod), × 1.3.
+    hand_mass: bool,
+    /// The box's friction, 0.2.
+    box_friction: bool,
+}
+
+impl Parameters {
+    const ALL: Self = Self {
+        box_mass: true,
+        hand_mass: true,
+        box_friction: true,
+    };
+    const NONE: Self = Self {
+        box_mass: false,
+        hand_mass: false,
+        box_friction: false,
+    };
+
+    /// All parameters but one, for each of the three.
+    fn all_but_one() -> [Self; 3] {
+        [
+            Self {
+                box_mass: false,
+                ..Self::ALL
+            },
+            Self {
+                hand_mass: false,
+                ..Self::ALL
+            },
+            Self {
+                box_friction: false,
+                ..Self::ALL
+            },
+        ]
+    }
+}
+
+/// Sets the parameters `p` of env `e` of the box-pushing scene.
+fn randomise(sim: &mut dyn PhysicsBackend, scene: &SceneDesc, e: usize, p: Parameters) {
+    let arm = &scene.articulations[0];
+    let link = (arm.model.links.iter())
+        .rposition(|l| l.inertial.mass > 0.0)
+        .expect("a link with mass");
+    let box_ = BodyRef::RigidObject(0);
+    if p.box_mass {
+        let m = scene.rigid_objects[0].body.inertial.mass;
+        sim.set_masses(box_, &[e], &[1.5 * m]).expect("box mass");
+    }
+    if p.hand_mass {
+        let m = arm.model.links[link].inertial.mass;
+        let hand = BodyRef::Link {
+            articulation: 0,
+            link,
+        };
+        sim.set_masses(hand, &[e], &[1.3 * m]).expect("hand mass");
+    }
+    if p.box_friction {
+        sim.set_friction(box_, &[e], &[0.2]).expect("box friction");
+    }
+}
+
+/// Steps `ks` with each env's bias forces plus `scale · sin(0.7 (7k + i))` as the efforts of
+/// joint `i` (the same in every env).
+fn run_with_efforts(sim: &mut dyn PhysicsBackend, ks: std::ops::Range<usize>, scale: f32) {
+    let n = sim.num_envs();
+    for k in ks {
+        let bias = sim.articulation(0).bias_forces.to_vec();
+        let tau: Vec<f32> = (0..n * 7)
+            .map(|j| bias[j] + scale * ((k * 7 + j % 7) as f32 * 0.7).sin())
+            .collect();
+        sim.set_joint_efforts(0, &tau).expect("efforts");
+        sim.step_n(10).expect("step");
+    }
+}
+
+/// The bits of env `e`'s joint state and box state.
+fn env_bits(sim: &dyn PhysicsBackend, e: usize) -> Vec<u32> {
+    let (a, o) = (sim.articulation(0), sim.rigid_object(0));
+    let (q, qd) = (
+        &a.joint_pos[e * 7..e * 7 + 7],
+        &a.joint_vel[e * 7..e * 7 + 7],
+    );
+    q.iter()
+        .chain(qd)
+        .chain(&o.pos[e].to_array())
+        .chain(&o.quat[e].to_array())
+        .chain(&o.lin_vel[e].to_array())
+        .chain(&o.ang_vel[e].to_array())
+        .map(|v| v.to_bits())
+        .collect()
+}
+
+/// The bits of env `e`'s state after each of 10 steps with efforts of scale 5.
+fn trajectory_bits(sim: &mut dyn PhysicsBackend, e: usize) -> Vec<Vec<u32>> {
+    (0..10)
+        .map(|k| {
+            run_with_efforts(sim, k..k + 1, 5.0);
+            env_bits(sim, e)
+        })
+        .collect()
+}
+
 /// A reset env forgets its past: after 5 steps in which the box slides over the table (contacts
 /// with friction impulses, which the solver warm-starts from), the arm and the box are written
 /// back to a state (the default joints, the box settled on the table, at rest); the env then
 /// follows the same trajectory, bit for bit, as one that starts from that state. It keeps what
-/// is not state: the box's and the hand's masses and the box's friction, set before its history
-/// (and shown to change the trajectory).
+/// is not state: the box's and the hand's masses and the box's friction, set before its history.
 pub fn a_reset_env_forgets_its_past(backend: &str) {
     a_reset_env_forgets_its_past_with(&sim_cfg(backend));
 }
@@ -447,52 +553,22 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
     let scene = resolve(&box_pushing_scene_cfg());
     let backend = &settings.backend;
     let arm = &scene.articulations[0];
-    let build = |randomised: bool| {
+    let build = |p: Parameters| {
         let mut sim = orbit_core::physics::build_backend(&scene, 1, settings).expect("build");
-        if randomised {
-            // The last link with a mass: the hand with the rod.
-            let link = (arm.model.links.iter())
-                .rposition(|l| l.inertial.mass > 0.0)
-                .expect("a link with mass");
-            let (box_, hand) = (
-                BodyRef::RigidObject(0),
-                BodyRef::Link {
-                    articulation: 0,
-                    link,
-                },
-            );
-            let box_mass = scene.rigid_objects[0].body.inertial.mass;
-            let hand_mass = arm.model.links[link].inertial.mass;
-            sim.set_masses(box_, &[0], &[1.5 * box_mass])
-                .expect("box mass");
-            sim.set_masses(hand, &[0], &[1.3 * hand_mass])
-                .expect("hand mass");
-            sim.set_friction(box_, &[0], &[0.2]).expect("box friction");
-        }
+        randomise(&mut *sim, &scene, 0, p);
         sim
     };
-    // Steps with the bias forces plus `efforts(k)` as joint efforts.
-    let run = |sim: &mut Box<dyn PhysicsBackend>, ks: std::ops::Range<usize>, scale: f32| {
-        for k in ks {
-            let bias = sim.articulation(0).bias_forces.to_vec();
-            let tau: Vec<f32> = (0..7)
-                .map(|i| bias[i] + scale * ((k * 7 + i) as f32 * 0.7).sin())
-                .collect();
-            sim.set_joint_efforts(0, &tau).expect("efforts");
-            sim.step_n(10).expect("step");
-        }
-    };
     let settled = {
-        let mut sim = build(false);
-        run(&mut sim, 0..20, 0.0);
+        let mut sim = build(Parameters::NONE);
+        run_with_efforts(&mut *sim, 0..20, 0.0);
         let o = sim.rigid_object(0);
         orbit_core::scene::RootState {
             pose: Pose::new(o.pos[0], o.quat[0]),
             ..Default::default()
         }
     };
-    let trajectory = |history: bool, randomised: bool| {
-        let mut sim = build(randomised);
+    let trajectory = |history: bool| {
+        let mut sim = build(Parameters::ALL);
         if history {
             // The box slides over the table: its contacts carry friction impulses when the
             // reset comes.
@@ -502,7 +578,7 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
             };
             sim.write_root_state(0, &[0], &[sliding])
                 .expect("root state");
-            run(&mut sim, 0..5, 0.0);
+            run_with_efforts(&mut *sim, 0..5, 0.0);
             assert!(
                 sim.rigid_object(0).lin_vel[0].x > 0.1,
                 "the box still slides"
@@ -512,30 +588,79 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
             .expect("joint state");
         sim.write_root_state(0, &[0], &[settled])
             .expect("root state");
-        let mut states = Vec::new();
-        for k in 0..10 {
-            run(&mut sim, k..k + 1, 5.0);
-            let (a, o) = (sim.articulation(0), sim.rigid_object(0));
-            states.push(
-                a.joint_pos
-                    .iter()
-                    .chain(a.joint_vel)
-                    .chain(&o.pos[0].to_array())
-                    .chain(&o.lin_vel[0].to_array())
-                    .map(|v| v.to_bits())
-                    .collect::<Vec<_>>(),
-            );
-        }
-        states
+        trajectory_bits(&mut *sim, 0)
     };
-    let (fresh, reset) = (trajectory(false, true), trajectory(true, true));
-    assert_ne!(
-        fresh,
-        trajectory(false, false),
-        "the masses and the friction change the trajectory"
-    );
+    let (fresh, reset) = (trajectory(false), trajectory(true));
     for (k, (f, r)) in fresh.iter().zip(&reset).enumerate() {
         assert_eq!(f, r, "step {k} after the reset differs from a fresh start");
     }
     println!("a_reset_env_forgets_its_past[{backend}]: 10 steps bit-identical");
+}
+
+/// A write replaces only what it names. Two envs, env 1 with other masses and another friction
+/// (each of which is shown to change its trajectory), take 10 steps with the box sliding and
+/// the arm moving; then env 1's box alone is written (sliding back). Env 0 stays as it was, bit
+/// for bit, and env 1's arm within 1e-6 (a backend that rebuilds the env's world passes its
+/// joint state through the simulator's own update); env 1 then follows, bit for bit, the
+/// trajectory of an env built with its parameters and written to the same state without a
+/// history.
+pub fn a_write_replaces_only_what_it_names(backend: &str) {
+    a_write_replaces_only_what_it_names_with(&sim_cfg(backend));
+}
+
+/// [`a_write_replaces_only_what_it_names`] with given simulation settings.
+pub fn a_write_replaces_only_what_it_names_with(settings: &orbit_core::physics::SimCfg) {
+    let scene = resolve(&box_pushing_scene_cfg());
+    let backend = &settings.backend;
+    let build = |n: usize, e: usize, p: Parameters| {
+        let mut sim = orbit_core::physics::build_backend(&scene, n, settings).expect("build");
+        randomise(&mut *sim, &scene, e, p);
+        sim
+    };
+    let mut sim = build(2, 1, Parameters::ALL);
+    let start = scene.rigid_objects[0].default_root_state;
+    let sliding = orbit_core::scene::RootState {
+        lin_vel: glam::Vec3::new(0.0, 0.4, 0.0),
+        ..start
+    };
+    sim.write_root_state(0, &[0, 1], &[sliding, sliding])
+        .expect("root state");
+    run_with_efforts(&mut *sim, 0..10, 2.0);
+    let before = [env_bits(&*sim, 0), env_bits(&*sim, 1)];
+    let (q, qd) = {
+        let a = sim.articulation(0);
+        (a.joint_pos[7..14].to_vec(), a.joint_vel[7..14].to_vec())
+    };
+    let o = sim.rigid_object(0);
+    let back = orbit_core::scene::RootState {
+        pose: Pose::new(o.pos[1], o.quat[1]),
+        lin_vel: glam::Vec3::new(0.0, -0.4, 0.0),
+        ang_vel: glam::Vec3::ZERO,
+    };
+    sim.write_root_state(0, &[1], &[back]).expect("root state");
+    assert_eq!(env_bits(&*sim, 0), before[0], "env 0 changed");
+    let after = env_bits(&*sim, 1);
+    for (i, (a, b)) in after[..14].iter().zip(&before[1][..14]).enumerate() {
+        let (a, b) = (f32::from_bits(*a), f32::from_bits(*b));
+        assert!(
+            (a - b).abs() <= 1e-6,
+            "joint value {i} of env 1 moved from {b} to {a}"
+        );
+    }
+    let carried = trajectory_bits(&mut *sim, 1);
+    let fresh = |p: Parameters| {
+        let mut sim = build(1, 0, p);
+        sim.write_joint_state(0, &[0], &q, &qd)
+            .expect("joint state");
+        sim.write_root_state(0, &[0], &[back]).expect("root state");
+        trajectory_bits(&mut *sim, 0)
+    };
+    let reference = fresh(Parameters::ALL);
+    for p in Parameters::all_but_one() {
+        assert_ne!(fresh(p), reference, "{p:?} changes nothing");
+    }
+    for (k, (f, c)) in reference.iter().zip(&carried).enumerate() {
+        assert_eq!(f, c, "step {k} after the write differs from a fresh start");
+    }
+    println!("a_write_replaces_only_what_it_names[{backend}]: 10 steps bit-identical");
 }

@@ -156,6 +156,9 @@ fn add_body(
         .bodies
         .insert(builder.pose(to_rapier_pose(pose)).can_sleep(false));
     add_shapes(world, body, &model.shapes);
+    // Fold the mass properties in now, not at the first step: a state write before then
+    // converts the velocity of the body origin with the centre of mass.
+    world.bodies[body].recompute_mass_properties_from_colliders(&world.colliders);
     body
 }
 
@@ -586,7 +589,9 @@ impl EnvWorld {
 
     /// Gives a body the mass properties `inertial`.
     pub fn set_inertial(&mut self, handle: RigidBodyHandle, inertial: &Inertial) {
-        self.world.bodies[handle].set_additional_mass_properties(mass_props(inertial), true);
+        let body = &mut self.world.bodies[handle];
+        body.set_additional_mass_properties(mass_props(inertial), true);
+        body.recompute_mass_properties_from_colliders(&self.world.colliders);
     }
 
     /// Sets the friction of every collider of a body.

@@ -212,8 +212,10 @@ impl RapierBackend {
                     env.arts[a].kin.set_inertial(l, inertial);
                 }
             }
+            let r = e * b.dofs..(e + 1) * b.dofs;
+            // The applied-effort estimate of the next publish adds the last bias forces.
+            env.arts[a].out.bias.copy_from_slice(&b.bias[r.clone()]);
             if written != Written::Articulation(a) {
-                let r = e * b.dofs..(e + 1) * b.dofs;
                 env.write_joint_state(a, &b.joint_pos[r.clone()], &b.joint_vel[r]);
             }
         }

@@ -61,3 +61,8 @@ fn resets_leave_other_envs_untouched() {
 fn a_reset_env_forgets_its_past() {
     orbit_conformance::a_reset_env_forgets_its_past(BACKEND_NAME);
 }
+
+#[test]
+fn a_write_replaces_only_what_it_names() {
+    orbit_conformance::a_write_replaces_only_what_it_names(BACKEND_NAME);
+}

@@ -116,3 +116,10 @@ fn a_reset_env_forgets_its_past() {
         orbit_conformance::a_reset_env_forgets_its_past(BACKEND_NAME);
     }
 }
+
+#[test]
+fn a_write_replaces_only_what_it_names() {
+    if gpu_available() {
+        orbit_conformance::a_write_replaces_only_what_it_names(BACKEND_NAME);
+    }
+}
