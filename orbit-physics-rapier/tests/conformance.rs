@@ -66,3 +66,8 @@ fn a_reset_env_forgets_its_past() {
 fn a_write_replaces_only_what_it_names() {
     orbit_conformance::a_write_replaces_only_what_it_names(BACKEND_NAME);
 }
+
+#[test]
+fn batched_writes_equal_single_writes() {
+    orbit_conformance::batched_writes_equal_single_writes(BACKEND_NAME);
+}

@@ -1,8 +1,10 @@
-//! Reading back the rows of a few envs. After a reset writes some envs' state, only those envs
-//! are republished (see `WgpuBackend::after_write`), so only their rows of the host mirror are
-//! stale. A small kernel copies those rows from every state section into one compact buffer,
-//! which is read back instead of the whole state (tens of megabytes at 65 536 envs, for the
-//! one percent of envs that finished an episode).
+//! Moving the rows of a few envs between the host and the GPU. After a reset writes some envs'
+//! state, only those envs are republished (see `WgpuBackend::after_write`), so only their rows
+//! of the host mirror are stale. A small kernel copies those rows from every state section into
+//! one compact buffer, which is read back instead of the whole state (tens of megabytes at
+//! 65 536 envs, for the one percent of envs that finished an episode). The written rows go the
+//! other way: packed on the host, uploaded compactly and put in place by a second kernel,
+//! instead of uploading every row between the lowest and the highest env written.
 
 use crate::gpu::Gpu;
 use crate::layout::BufferLayout;
@@ -14,39 +16,57 @@ const WORKGROUP: u32 = 64;
 /// that the whole state is read back, which is one contiguous copy.
 const MAX_FRACTION: usize = 4;
 
-/// The kernel: `out[i·F + k] = st[base_k + ids[i] · stride_k]` for the `F` per-env floats
-/// `k`, whose `(base, stride)` pairs are in `cols`.
-const SOURCE: &str = "
-struct Params {
+/// A kernel over the `F` floats of each listed env: invocation `i` handles float `k = i mod F`
+/// of env slot `i / F`, whose place in the state is `cols[2k] + ids[slot] · cols[2k + 1]`;
+/// `body` moves it between `st` (the state) and `rows` (the packed rows).
+fn kernel(state_access: &str, rows_access: &str, body: &str) -> String {
+    format!(
+        "
+struct Params {{
     envs: u32,
     floats: u32,
     pad0: u32,
     pad1: u32,
-}
+}}
 
-@group(0) @binding(0) var<storage, read> st: array<f32>;
+@group(0) @binding(0) var<storage, {state_access}> st: array<f32>;
 @group(0) @binding(1) var<storage, read> ids: array<u32>;
 @group(0) @binding(2) var<storage, read> cols: array<u32>;
-@group(0) @binding(3) var<storage, read_write> out: array<f32>;
+@group(0) @binding(3) var<storage, {rows_access}> rows: array<f32>;
 @group(0) @binding(4) var<uniform> params: Params;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
-        @builtin(num_workgroups) groups: vec3<u32>) {
+        @builtin(num_workgroups) groups: vec3<u32>) {{
     let i = gid.x + gid.y * groups.x * 64u;
-    if i >= params.envs * params.floats {
+    if i >= params.envs * params.floats {{
         return;
-    }
-    let row = i / params.floats;
-    let k = i % params.floats;
-    out[i] = st[cols[2u * k] + ids[row] * cols[2u * k + 1u]];
+    }}
+    let at = cols[2u * (i % params.floats)] + ids[i / params.floats] * cols[2u * (i % params.floats) + 1u];
+    {body}
+}}
+"
+    )
 }
-";
 
-/// The gather kernel with its buffers, bound to one backend's state buffer.
+/// The gather: `rows[i·F + k] = st[base_k + ids[i] · stride_k]`.
+fn gather_source() -> String {
+    kernel("read", "read_write", "rows[i] = st[at];")
+}
+
+/// The write, the inverse of the gather: `st[base_k + ids[i] · stride_k] = rows[i·F + k]`.
+fn write_source() -> String {
+    kernel("read_write", "read", "st[at] = rows[i];")
+}
+
+/// The gather and write kernels with their buffers, bound to one backend's state buffer.
 pub struct RowGather {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
+    /// The write kernel, bound to the same ids, rows (`out`) and params, and its own columns.
+    write_pipeline: wgpu::ComputePipeline,
+    write_bind_group: wgpu::BindGroup,
+    write_cols: wgpu::Buffer,
     ids: wgpu::Buffer,
     params: wgpu::Buffer,
     out: wgpu::Buffer,
@@ -88,30 +108,47 @@ impl RowGather {
         let out = buffer(
             "orbit gather rows",
             max_envs * floats * 4,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            storage | wgpu::BufferUsages::COPY_SRC,
         );
+        let write_cols = buffer("orbit write columns", cols.len() * 4, storage);
         let params = buffer(
             "orbit gather params",
             16,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let pipeline = gpu.pipeline(SOURCE);
-        let entries = [state, &ids, &cols_buf, &out, &params]
-            .into_iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
+        let bind = |label: &str, pipeline: &wgpu::ComputePipeline, buffers: [&wgpu::Buffer; 5]| {
+            let entries = buffers
+                .into_iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect::<Vec<_>>();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
             })
-            .collect::<Vec<_>>();
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("orbit gather"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
+        };
+        let pipeline = gpu.pipeline(&gather_source());
+        let bind_group = bind(
+            "orbit gather",
+            &pipeline,
+            [state, &ids, &cols_buf, &out, &params],
+        );
+        let write_pipeline = gpu.pipeline(&write_source());
+        let write_bind_group = bind(
+            "orbit write",
+            &write_pipeline,
+            [state, &ids, &write_cols, &out, &params],
+        );
         Self {
             pipeline,
             bind_group,
+            write_pipeline,
+            write_bind_group,
+            write_cols,
             ids,
             params,
             out,
@@ -128,7 +165,68 @@ impl RowGather {
 
     /// Bytes of GPU memory the gather's buffers take.
     pub fn device_memory_bytes(&self) -> usize {
-        4 * (self.max_envs * (self.floats + 1) + 2 * self.floats + 4)
+        4 * (self.max_envs * (self.floats + 1) + 4 * self.floats + 4)
+    }
+
+    /// Uploads the rows of `env_ids` in `sections` (each `(first float, floats per env)`, per-env
+    /// sections of the state) from the host copy `state` and puts them in place on the GPU, in
+    /// a submission of its own; false (nothing done) where uploading every row between the
+    /// lowest and the highest env is as cheap, or there are too many envs.
+    pub fn write(
+        &self,
+        gpu: &Gpu,
+        env_ids: &[usize],
+        sections: &[(usize, usize)],
+        state: &[f32],
+    ) -> bool {
+        let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
+            return true;
+        };
+        let floats: usize = sections.iter().map(|&(_, w)| w).sum();
+        let packed_floats = env_ids.len() * (floats + 1) + 2 * floats;
+        if env_ids.len() > self.max_envs || packed_floats >= (hi - lo + 1) * floats {
+            return false;
+        }
+        let cols: Vec<u32> = sections
+            .iter()
+            .flat_map(|&(start, width)| {
+                (0..width).flat_map(move |j| [(start + j) as u32, width as u32])
+            })
+            .collect();
+        let mut rows = Vec::with_capacity(env_ids.len() * floats);
+        for &e in env_ids {
+            for &(start, width) in sections {
+                rows.extend_from_slice(&state[start + e * width..start + (e + 1) * width]);
+            }
+        }
+        let ids: Vec<u32> = env_ids.iter().map(|&e| e as u32).collect();
+        let queue = &gpu.queue;
+        queue.write_buffer(&self.ids, 0, bytemuck::cast_slice(&ids));
+        queue.write_buffer(&self.write_cols, 0, bytemuck::cast_slice(&cols));
+        queue.write_buffer(&self.out, 0, bytemuck::cast_slice(&rows));
+        queue.write_buffer(
+            &self.params,
+            0,
+            bytemuck::cast_slice(&[ids.len() as u32, floats as u32, 0, 0]),
+        );
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("orbit write"),
+            });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("orbit write"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.write_pipeline);
+            pass.set_bind_group(0, &self.write_bind_group, &[]);
+            let groups = (rows.len() as u32).div_ceil(WORKGROUP);
+            let x = groups.min(gpu.limits.max_compute_workgroups_per_dimension);
+            pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
+        }
+        queue.submit([encoder.finish()]);
+        true
     }
 
     /// Queues the copy of `env_ids`' rows into the compact buffer and from there into

@@ -450,8 +450,15 @@ impl WgpuBackend {
     }
 
     /// Uploads the rows of `env_ids` in each state section `(first float, floats per env)`:
+    /// packed and put in place by the write kernel when the envs are few and far apart, else
     /// per section the span from the lowest to the highest env written.
     fn upload_state_rows(&self, env_ids: &[usize], sections: &[(usize, usize)]) {
+        if self
+            .gather
+            .write(&self.gpu, env_ids, sections, self.state_f32())
+        {
+            return;
+        }
         let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
             return;
         };

@@ -123,3 +123,10 @@ fn a_write_replaces_only_what_it_names() {
         orbit_conformance::a_write_replaces_only_what_it_names(BACKEND_NAME);
     }
 }
+
+#[test]
+fn batched_writes_equal_single_writes() {
+    if gpu_available() {
+        orbit_conformance::batched_writes_equal_single_writes(BACKEND_NAME);
+    }
+}
