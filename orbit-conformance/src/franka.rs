@@ -695,6 +695,10 @@ pub fn batched_writes_equal_single_writes(backend: &str) {
         })
         .collect();
     let qd = vec![0.1; ids.len() * 7];
+    // Upright boxes without spin: written one env at a time, an env written earlier is
+    // republished again by each later write (its fresh flag lasts until a step), and a
+    // republish normalises the quaternion and converts the velocity to the centre of mass and
+    // back, which is exact only for such states.
     let start = scene.rigid_objects[0].default_root_state;
     let boxes: Vec<_> = ids
         .iter()

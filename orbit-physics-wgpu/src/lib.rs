@@ -450,8 +450,8 @@ impl WgpuBackend {
     }
 
     /// Uploads the rows of `env_ids` in each state section `(first float, floats per env)`:
-    /// packed and put in place by the write kernel when the envs are few and far apart, else
-    /// per section the span from the lowest to the highest env written.
+    /// packed and put in place by the write kernel when the envs are few (at most a quarter)
+    /// and far apart, else per section the span from the lowest to the highest env written.
     fn upload_state_rows(&self, env_ids: &[usize], sections: &[(usize, usize)]) {
         if self
             .gather
