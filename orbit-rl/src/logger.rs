@@ -51,6 +51,18 @@ impl ScalarLog {
     }
 }
 
+/// One history from the segments of a run resumed across run directories, oldest first: a
+/// resumed run starts a new directory at the iteration after its checkpoint, and redoes the
+/// iterations the previous directory logged past that checkpoint, so a later segment's
+/// iterations replace an earlier one's. Sorted by iteration.
+pub fn merge_segments(segments: Vec<Vec<IterationLog>>) -> Vec<IterationLog> {
+    let mut by_iteration = std::collections::BTreeMap::new();
+    for log in segments.into_iter().flatten() {
+        by_iteration.insert(log.iteration, log);
+    }
+    by_iteration.into_values().collect()
+}
+
 /// Reads a `scalars.csv` back into one [`IterationLog`] per iteration (for re-plotting a run
 /// that was stopped before it drew its curves). Tags it does not know go to `episode`.
 pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {

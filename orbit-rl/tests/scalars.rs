@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use orbit_rl::IterationLog;
-use orbit_rl::logger::{ScalarLog, read_scalars};
+use orbit_rl::logger::{ScalarLog, merge_segments, read_scalars};
 use orbit_rl::ppo::LossStats;
 
 fn log(iteration: usize, success: Option<f32>) -> IterationLog {
@@ -62,4 +62,19 @@ fn a_malformed_row_names_its_line() {
     let e = read_scalars(&path).unwrap_err().to_string();
     std::fs::remove_file(&path).unwrap();
     assert!(e.contains("line 2") && e.contains("five fields"), "{e}");
+}
+
+#[test]
+fn resumed_segments_merge_with_redone_iterations_replaced() {
+    // Iterations 0-4 in the first directory; the run resumed from the checkpoint after
+    // iteration 2 and logged 3-5 again in a second one (with other returns).
+    let mut redone: Vec<IterationLog> = (3..6).map(|i| log(i, Some(0.5))).collect();
+    for l in &mut redone {
+        l.mean_return = Some(7.0);
+    }
+    let merged = merge_segments(vec![(0..5).map(|i| log(i, None)).collect(), redone]);
+    let iterations: Vec<usize> = merged.iter().map(|l| l.iteration).collect();
+    assert_eq!(iterations, [0, 1, 2, 3, 4, 5]);
+    let returns: Vec<f32> = merged.iter().map(|l| l.mean_return.unwrap()).collect();
+    assert_eq!(returns, [-251.37, -250.37, -249.37, 7.0, 7.0, 7.0]);
 }
