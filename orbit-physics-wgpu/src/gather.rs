@@ -49,6 +49,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
     )
 }
 
+/// The `(base, stride)` pair of every float of `sections` (each `(first float, floats per env)`):
+/// float `j` of a section starts at `first + j` and steps by the section's width per env.
+fn columns(sections: &[(usize, usize)]) -> Vec<u32> {
+    sections
+        .iter()
+        .flat_map(|&(start, width)| {
+            (0..width).flat_map(move |j| [(start + j) as u32, width as u32])
+        })
+        .collect()
+}
+
 /// The gather: `rows[i·F + k] = st[base_k + ids[i] · stride_k]`.
 fn gather_source() -> String {
     kernel("read", "read_write", "rows[i] = st[at];")
@@ -85,12 +96,7 @@ impl RowGather {
         let device = &gpu.device;
         let sections = layout.env_sections();
         let floats: usize = sections.iter().map(|&(_, w)| w).sum();
-        let cols: Vec<u32> = sections
-            .iter()
-            .flat_map(|&(start, width)| {
-                (0..width).flat_map(move |j| [(start + j) as u32, width as u32])
-            })
-            .collect();
+        let cols = columns(&sections);
         let max_envs = layout.num_envs.div_ceil(MAX_FRACTION);
         let buffer = |label: &str, bytes: usize, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -187,12 +193,7 @@ impl RowGather {
         if env_ids.len() > self.max_envs || packed_floats >= (hi - lo + 1) * floats {
             return false;
         }
-        let cols: Vec<u32> = sections
-            .iter()
-            .flat_map(|&(start, width)| {
-                (0..width).flat_map(move |j| [(start + j) as u32, width as u32])
-            })
-            .collect();
+        let cols = columns(sections);
         let mut rows = Vec::with_capacity(env_ids.len() * floats);
         for &e in env_ids {
             for &(start, width) in sections {
@@ -200,32 +201,18 @@ impl RowGather {
             }
         }
         let ids: Vec<u32> = env_ids.iter().map(|&e| e as u32).collect();
-        let queue = &gpu.queue;
-        queue.write_buffer(&self.ids, 0, bytemuck::cast_slice(&ids));
-        queue.write_buffer(&self.write_cols, 0, bytemuck::cast_slice(&cols));
-        queue.write_buffer(&self.out, 0, bytemuck::cast_slice(&rows));
-        queue.write_buffer(
-            &self.params,
-            0,
-            bytemuck::cast_slice(&[ids.len() as u32, floats as u32, 0, 0]),
-        );
+        gpu.queue
+            .write_buffer(&self.write_cols, 0, bytemuck::cast_slice(&cols));
+        gpu.queue
+            .write_buffer(&self.out, 0, bytemuck::cast_slice(&rows));
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("orbit write"),
             });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("orbit write"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.write_pipeline);
-            pass.set_bind_group(0, &self.write_bind_group, &[]);
-            let groups = (rows.len() as u32).div_ceil(WORKGROUP);
-            let x = groups.min(gpu.limits.max_compute_workgroups_per_dimension);
-            pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
-        }
-        queue.submit([encoder.finish()]);
+        let pass = (&self.write_pipeline, &self.write_bind_group);
+        self.encode_pass(gpu, &mut encoder, pass, &ids, floats);
+        gpu.queue.submit([encoder.finish()]);
         true
     }
 
@@ -239,28 +226,39 @@ impl RowGather {
         staging: &wgpu::Buffer,
     ) -> u64 {
         debug_assert!(self.worthwhile(env_ids.len()));
-        let total = (env_ids.len() * self.floats) as u32;
+        let pass = (&self.pipeline, &self.bind_group);
+        self.encode_pass(gpu, encoder, pass, env_ids, self.floats);
+        let bytes = (env_ids.len() * self.floats * 4) as u64;
+        encoder.copy_buffer_to_buffer(&self.out, 0, staging, 0, bytes);
+        bytes
+    }
+
+    /// Queues one pass of a kernel (`pipeline` with its bind group) over `floats` floats of each
+    /// env in `env_ids`, after uploading the ids and the sizes.
+    fn encode_pass(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        (pipeline, bind_group): (&wgpu::ComputePipeline, &wgpu::BindGroup),
+        env_ids: &[u32],
+        floats: usize,
+    ) {
         gpu.queue
             .write_buffer(&self.ids, 0, bytemuck::cast_slice(env_ids));
         gpu.queue.write_buffer(
             &self.params,
             0,
-            bytemuck::cast_slice(&[env_ids.len() as u32, self.floats as u32, 0, 0]),
+            bytemuck::cast_slice(&[env_ids.len() as u32, floats as u32, 0, 0]),
         );
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("orbit gather"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
-            let groups = total.div_ceil(WORKGROUP);
-            let x = groups.min(gpu.limits.max_compute_workgroups_per_dimension);
-            pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
-        }
-        let bytes = u64::from(total) * 4;
-        encoder.copy_buffer_to_buffer(&self.out, 0, staging, 0, bytes);
-        bytes
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("orbit rows"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        let groups = ((env_ids.len() * floats) as u32).div_ceil(WORKGROUP);
+        let x = groups.min(gpu.limits.max_compute_workgroups_per_dimension);
+        pass.dispatch_workgroups(x, groups.div_ceil(x.max(1)), 1);
     }
 
     /// Writes the packed rows `packed` (as [`encode`](Self::encode) read them) of `env_ids`
