@@ -559,12 +559,7 @@ impl EnvWorld {
     }
 
     /// Sets the mass of a body, scaling its inertia; updates the kinematics copy for links.
-    pub fn set_mass(
-        &mut self,
-        handle: RigidBodyHandle,
-        inertial: &Inertial,
-        mass: f32,
-    ) -> Inertial {
+    pub fn set_mass(&mut self, body: BodyRef, inertial: &Inertial, mass: f32) -> Inertial {
         let scale = if inertial.mass > 0.0 {
             mass / inertial.mass
         } else {
@@ -575,7 +570,7 @@ impl EnvWorld {
             com: inertial.com,
             inertia: inertial.inertia * scale,
         };
-        self.set_inertial(handle, &new);
+        self.set_inertial(body, &new);
         new
     }
 
@@ -587,11 +582,16 @@ impl EnvWorld {
         }
     }
 
-    /// Gives a body the mass properties `inertial`.
-    pub fn set_inertial(&mut self, handle: RigidBodyHandle, inertial: &Inertial) {
-        let body = &mut self.world.bodies[handle];
-        body.set_additional_mass_properties(mass_props(inertial), true);
-        body.recompute_mass_properties_from_colliders(&self.world.colliders);
+    /// Gives a body the mass properties `inertial` (a link's also in the kinematics that
+    /// computes the bias forces).
+    pub fn set_inertial(&mut self, body: BodyRef, inertial: &Inertial) {
+        if let BodyRef::Link { articulation, link } = body {
+            self.arts[articulation].kin.set_inertial(link, *inertial);
+        }
+        let handle = self.body(body);
+        let rb = &mut self.world.bodies[handle];
+        rb.set_additional_mass_properties(mass_props(inertial), true);
+        rb.recompute_mass_properties_from_colliders(&self.world.colliders);
     }
 
     /// Sets the friction of every collider of a body.

@@ -208,8 +208,11 @@ impl RapierBackend {
             for (l, link) in links.iter().enumerate() {
                 let inertial = b.inertials[e * b.links + l];
                 if inertial != link.inertial {
-                    env.set_inertial(env.arts[a].links[l], &inertial);
-                    env.arts[a].kin.set_inertial(l, inertial);
+                    let body = BodyRef::Link {
+                        articulation: a,
+                        link: l,
+                    };
+                    env.set_inertial(body, &inertial);
                 }
             }
             let r = e * b.dofs..(e + 1) * b.dofs;
@@ -221,7 +224,7 @@ impl RapierBackend {
         }
         for (o, b) in self.objects.iter().enumerate() {
             if b.inertials[e] != self.scene.rigid_objects[o].body.inertial {
-                env.set_inertial(env.objects[o], &b.inertials[e]);
+                env.set_inertial(BodyRef::RigidObject(o), &b.inertials[e]);
             }
             if written != Written::Object(o) {
                 let state = RootState {
@@ -499,20 +502,14 @@ impl PhysicsBackend for RapierBackend {
         check_env_ids(env_ids, self.envs.len())?;
         check_values("masses", masses, env_ids.len(), "> 0", |m| m > 0.0)?;
         for (&e, &m) in env_ids.iter().zip(masses) {
-            let env = &mut self.envs[e];
-            let handle = env.body(body);
-            match body {
+            let slot = match body {
                 BodyRef::Link { articulation, link } => {
                     let b = &mut self.arts[articulation];
-                    let slot = &mut b.inertials[e * b.links + link];
-                    *slot = env.set_mass(handle, slot, m);
-                    env.arts[articulation].kin.set_inertial(link, *slot);
+                    &mut b.inertials[e * b.links + link]
                 }
-                BodyRef::RigidObject(o) => {
-                    let slot = &mut self.objects[o].inertials[e];
-                    *slot = env.set_mass(handle, slot, m);
-                }
-            }
+                BodyRef::RigidObject(o) => &mut self.objects[o].inertials[e],
+            };
+            *slot = self.envs[e].set_mass(body, slot, m);
         }
         Ok(())
     }
