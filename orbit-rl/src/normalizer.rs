@@ -93,17 +93,11 @@ impl EmpiricalNormalizer {
             "input and output batches differ in size"
         );
         let divisors = self.divisors();
-        let d = self.dim();
-        out.par_chunks_mut(ROW_BLOCK * d)
-            .zip(x.par_chunks(ROW_BLOCK * d))
-            .for_each(|(out, x)| {
-                for (out, x) in out.chunks_exact_mut(d).zip(x.chunks_exact(d)) {
-                    for (((o, &v), &m), &s) in out.iter_mut().zip(x).zip(&self.mean).zip(&divisors)
-                    {
-                        *o = (v - m) / s;
-                    }
-                }
-            });
+        self.for_rows_into(x, out, |x, out| {
+            for (((o, &v), &m), &s) in out.iter_mut().zip(x).zip(&self.mean).zip(&divisors) {
+                *o = (v - m) / s;
+            }
+        });
     }
 
     /// Inverts [`normalize`](Self::normalize) in place: `x·(σ + ε) + μ`.
@@ -121,6 +115,19 @@ impl EmpiricalNormalizer {
         let d = self.dim();
         x.par_chunks_mut(ROW_BLOCK * d)
             .for_each(|block| block.chunks_exact_mut(d).for_each(&f));
+    }
+
+    /// Applies `f` to every row of `x` and the same row of `out`, blocks of [`ROW_BLOCK`] rows
+    /// in parallel.
+    fn for_rows_into(&self, x: &[f32], out: &mut [f32], f: impl Fn(&[f32], &mut [f32]) + Sync) {
+        let d = self.dim();
+        out.par_chunks_mut(ROW_BLOCK * d)
+            .zip(x.par_chunks(ROW_BLOCK * d))
+            .for_each(|(out, x)| {
+                for (out, x) in out.chunks_exact_mut(d).zip(x.chunks_exact(d)) {
+                    f(x, out);
+                }
+            });
     }
 }
 
