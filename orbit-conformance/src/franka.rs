@@ -498,14 +498,21 @@ fn randomise(sim: &mut dyn PhysicsBackend, scene: &SceneDesc, e: usize, p: Param
     }
 }
 
-/// Steps `ks` with each env's bias forces plus `scale · sin(0.7 (7k + i))` as the efforts of
-/// joint `i` (the same in every env).
-fn run_with_efforts(sim: &mut dyn PhysicsBackend, ks: std::ops::Range<usize>, scale: f32) {
+/// Steps `ks` with each env's bias forces plus `scale · sin(0.7 (7k + i) + phase · e)` as the
+/// efforts of joint `i` in env `e` (with `phase` 0, the same in every env).
+fn run_with_efforts(
+    sim: &mut dyn PhysicsBackend,
+    ks: std::ops::Range<usize>,
+    scale: f32,
+    phase: f32,
+) {
     let n = sim.num_envs();
     for k in ks {
         let bias = sim.articulation(0).bias_forces.to_vec();
         let tau: Vec<f32> = (0..n * 7)
-            .map(|j| bias[j] + scale * ((k * 7 + j % 7) as f32 * 0.7).sin())
+            .map(|j| {
+                bias[j] + scale * ((k * 7 + j % 7) as f32 * 0.7 + phase * (j / 7) as f32).sin()
+            })
             .collect();
         sim.set_joint_efforts(0, &tau).expect("efforts");
         sim.step_n(10).expect("step");
@@ -533,7 +540,7 @@ fn env_bits(sim: &dyn PhysicsBackend, e: usize) -> Vec<u32> {
 fn trajectory_bits(sim: &mut dyn PhysicsBackend, e: usize) -> Vec<Vec<u32>> {
     (0..10)
         .map(|k| {
-            run_with_efforts(sim, k..k + 1, 5.0);
+            run_with_efforts(sim, k..k + 1, 5.0, 0.0);
             env_bits(sim, e)
         })
         .collect()
@@ -560,7 +567,7 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
     };
     let settled = {
         let mut sim = build(Parameters::NONE);
-        run_with_efforts(&mut *sim, 0..20, 0.0);
+        run_with_efforts(&mut *sim, 0..20, 0.0, 0.0);
         let o = sim.rigid_object(0);
         orbit_core::scene::RootState {
             pose: Pose::new(o.pos[0], o.quat[0]),
@@ -578,7 +585,7 @@ pub fn a_reset_env_forgets_its_past_with(settings: &orbit_core::physics::SimCfg)
             };
             sim.write_root_state(0, &[0], &[sliding])
                 .expect("root state");
-            run_with_efforts(&mut *sim, 0..5, 0.0);
+            run_with_efforts(&mut *sim, 0..5, 0.0, 0.0);
             assert!(
                 sim.rigid_object(0).lin_vel[0].x > 0.1,
                 "the box still slides"
@@ -625,7 +632,7 @@ pub fn a_write_replaces_only_what_it_names_with(settings: &orbit_core::physics::
     };
     sim.write_root_state(0, &[0, 1], &[sliding, sliding])
         .expect("root state");
-    run_with_efforts(&mut *sim, 0..10, 2.0);
+    run_with_efforts(&mut *sim, 0..10, 2.0, 0.0);
     let before = [env_bits(&*sim, 0), env_bits(&*sim, 1)];
     let (q, qd) = {
         let a = sim.articulation(0);
@@ -675,16 +682,6 @@ pub fn batched_writes_equal_single_writes(backend: &str) {
     let scene = resolve(&box_pushing_scene_cfg());
     let arm = &scene.articulations[0];
     let n = 64;
-    let steps = |sim: &mut dyn PhysicsBackend, ks: std::ops::Range<usize>| {
-        for k in ks {
-            let bias = sim.articulation(0).bias_forces.to_vec();
-            let tau: Vec<f32> = (0..n * 7)
-                .map(|j| bias[j] + 2.0 * ((k * 7 + j % 7) as f32 * 0.7 + (j / 7) as f32).sin())
-                .collect();
-            sim.set_joint_efforts(0, &tau).expect("efforts");
-            sim.step_n(10).expect("step");
-        }
-    };
     let ids = [0, 21, 63];
     let q: Vec<f32> = ids
         .iter()
@@ -709,7 +706,7 @@ pub fn batched_writes_equal_single_writes(backend: &str) {
         .collect();
     let states = |batched: bool| {
         let mut sim = orbit_core::physics::build_backend(&scene, n, &settings).expect("build");
-        steps(&mut *sim, 0..5);
+        run_with_efforts(&mut *sim, 0..5, 2.0, 1.0);
         if batched {
             sim.write_joint_state(0, &ids, &q, &qd)
                 .expect("joint state");
@@ -724,7 +721,7 @@ pub fn batched_writes_equal_single_writes(backend: &str) {
             }
         }
         let written: Vec<_> = (0..n).map(|e| env_bits(&*sim, e)).collect();
-        steps(&mut *sim, 5..10);
+        run_with_efforts(&mut *sim, 5..10, 2.0, 1.0);
         let later: Vec<_> = (0..n).map(|e| env_bits(&*sim, e)).collect();
         (written, later)
     };
