@@ -57,8 +57,9 @@ struct Args {
     /// initial noise std 1.0 acts (the arm sweeps the table: more contacts per env).
     #[arg(long, value_enum, default_value = "sine")]
     actions: EnvActions,
-    /// Stagger the full env's episodes (env `e` starts at step `e mod max_episode_length`, as
-    /// training does), so that some envs reset every step instead of all at once.
+    /// Stagger the full env's episodes (env `e` starts at step `e mod max_episode_length`;
+    /// training draws the start steps at random), so that some envs reset every step instead
+    /// of all at once.
     #[arg(long)]
     staggered: bool,
 }
