@@ -692,16 +692,22 @@ pub fn batched_writes_equal_single_writes(backend: &str) {
         })
         .collect();
     let qd = vec![0.1; ids.len() * 7];
-    // Upright boxes without spin: written one env at a time, an env written earlier is
-    // republished again by each later write (its fresh flag lasts until a step), and a
-    // republish normalises the quaternion and converts the velocity to the centre of mass and
-    // back, which is exact only for such states.
+    // Tilted, spinning boxes, whose republish is not exact (it normalises the quaternion and
+    // moves the velocity to the centre of mass and back): a write must republish only its own
+    // envs, or the envs written one at a time, republished again by each later write, drift.
     let start = scene.rigid_objects[0].default_root_state;
     let boxes: Vec<_> = ids
         .iter()
-        .map(|&e| orbit_core::scene::RootState {
-            lin_vel: glam::Vec3::new(0.0, 0.01 * e as f32, 0.0),
-            ..start
+        .map(|&e| {
+            let tilt = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.05, -0.03, 0.1 * e as f32);
+            orbit_core::scene::RootState {
+                pose: Pose::new(
+                    start.pose.pos + glam::Vec3::new(0.0, 0.0, 0.02),
+                    tilt * start.pose.rot,
+                ),
+                lin_vel: glam::Vec3::new(0.37, 0.013 * e as f32, -0.21),
+                ang_vel: glam::Vec3::new(3.1, -2.3, 5.7 + 0.01 * e as f32),
+            }
         })
         .collect();
     let states = |batched: bool| {

@@ -134,6 +134,7 @@ impl Gen<'_> {
             ),
         );
         c(self, "MARGIN", f(CONTACT_MARGIN));
+        c(self, "WRITTEN", f(layout::WRITTEN));
         let contact = &sim.contact;
         // MuJoCo's rows (`normal_row` in step.wgsl); the soft step's as its target and
         // regulariser scales.

@@ -32,7 +32,7 @@ pub use gpu::{Gpu, gpu};
 
 use compile::CompiledScene;
 use gather::RowGather;
-use layout::BufferLayout;
+use layout::{BufferLayout, FRESH, NOT_FRESH, WRITTEN};
 use mirror::HostMirror;
 
 /// Name under which this backend is registered.
@@ -80,7 +80,7 @@ pub struct WgpuBackend {
     /// and efforts, not the per-env parameters that rarely change).
     dirty: Vec<std::ops::Range<usize>>,
     /// Envs flagged fresh (state written) since the last step: the next step's first substep
-    /// drops their warm starts, and a republish after a write publishes all of them.
+    /// drops their warm starts.
     fresh_envs: Vec<usize>,
     /// Default masses of links then objects, for mass scales.
     default_masses: Vec<f32>,
@@ -501,11 +501,11 @@ impl WgpuBackend {
         self.dirty.push(start..start + len);
     }
 
-    /// Runs `substeps` substeps (0: only recompute what is published, for the envs flagged
-    /// fresh if `only_fresh`, else for all); the host mirror reads the published state back
-    /// when it is next looked at.
-    fn dispatch(&mut self, substeps: u32, only_fresh: bool) -> Result<(), PhysicsError> {
-        let only_fresh = only_fresh && substeps == 0;
+    /// Runs `substeps` substeps (0: only recompute what is published, for the envs `written`
+    /// if given, flagged [`WRITTEN`] in the fresh input; else for all); the host mirror reads
+    /// the published state back when it is next looked at.
+    fn dispatch(&mut self, substeps: u32, written: Option<&[usize]>) -> Result<(), PhysicsError> {
+        let written = written.filter(|_| substeps == 0);
         self.upload_inputs();
         // Steps (not republishes) are timed.
         let timer = self.timer.as_ref().filter(|_| substeps > 0);
@@ -514,7 +514,7 @@ impl WgpuBackend {
         queue.write_buffer(
             &self.params_buf,
             0,
-            bytemuck::cast_slice(&[substeps, u32::from(only_fresh), 0, 0]),
+            bytemuck::cast_slice(&[substeps, u32::from(written.is_some()), 0, 0]),
         );
         let device = &gpu.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -544,7 +544,7 @@ impl WgpuBackend {
         if timer.is_some() {
             self.timed = true;
         }
-        self.mark_stale(only_fresh);
+        self.mark_stale(written);
         self.wait_for_pending()?;
         self.pending = Some(submitted);
         // Fresh flags last until a step has consumed them (its first substep skips the warm
@@ -552,18 +552,18 @@ impl WgpuBackend {
         if substeps > 0 && !self.fresh_envs.is_empty() {
             let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
             for e in self.fresh_envs.drain(..) {
-                self.inputs[fresh + e] = 0.0;
+                self.inputs[fresh + e] = NOT_FRESH;
             }
             self.mark(fresh, n);
         }
         Ok(())
     }
 
-    /// Records what a dispatch makes stale: the envs flagged fresh if it republished only
-    /// those, else every env.
-    fn mark_stale(&mut self, only_fresh: bool) {
+    /// Records what a dispatch makes stale: the envs `written` if it republished only those,
+    /// else every env.
+    fn mark_stale(&mut self, written: Option<&[usize]>) {
         let previous = std::mem::replace(&mut self.stale, Stale::All);
-        let ids = only_fresh.then(|| self.fresh_envs.iter().map(|&e| e as u32));
+        let ids = written.map(|ids| ids.iter().map(|&e| e as u32));
         let stale = match (ids, previous) {
             (Some(ids), _) if self.state.is_current() => Stale::Envs(ids.collect()),
             (Some(ids), Stale::Envs(mut earlier)) => {
@@ -582,31 +582,41 @@ impl WgpuBackend {
     /// Marks every env fresh and republishes (after construction).
     fn refresh_all(&mut self) -> Result<(), PhysicsError> {
         let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
-        self.inputs[fresh..fresh + n].fill(1.0);
+        self.inputs[fresh..fresh + n].fill(FRESH);
         self.mark(fresh, n);
         self.fresh_envs = (0..n).collect();
-        self.dispatch(0, false)
+        self.dispatch(0, None)
     }
 
     /// After a state write to `sections` (see [`upload_state_rows`](Self::upload_state_rows)):
     /// upload those rows, flag the envs fresh (the next step drops their warm starts) and
-    /// republish the flagged envs (only them, so that only their rows are read back and every
-    /// other env's state stays as it was).
+    /// republish the envs of this write. Only they are republished, so that only their rows
+    /// are read back and every other env's state stays as it was, envs written earlier in the
+    /// same step included (a republish normalises quaternions and moves velocities to the
+    /// centre of mass and back, which can move the last bits of a state it republishes again).
     fn after_write(
         &mut self,
         env_ids: &[usize],
         sections: &[(usize, usize)],
     ) -> Result<(), PhysicsError> {
+        let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
+            return Ok(());
+        };
         let fresh = self.buffers.fresh;
         for &e in env_ids {
-            if self.inputs[fresh + e] == 0.0 {
-                self.inputs[fresh + e] = 1.0;
+            if self.inputs[fresh + e] == NOT_FRESH {
                 self.fresh_envs.push(e);
             }
+            self.inputs[fresh + e] = WRITTEN;
         }
-        self.mark(fresh, self.buffers.num_envs);
+        self.mark(fresh + lo, hi - lo + 1);
         self.upload_state_rows(env_ids, sections);
-        self.dispatch(0, true)
+        self.dispatch(0, Some(env_ids))?;
+        for &e in env_ids {
+            self.inputs[fresh + e] = FRESH;
+        }
+        self.mark(fresh + lo, hi - lo + 1);
+        Ok(())
     }
 
     fn check_articulation(&self, a: usize) -> Result<layout::ArticulationOffsets, PhysicsError> {
@@ -707,7 +717,7 @@ impl PhysicsBackend for WgpuBackend {
     }
 
     fn step(&mut self) -> Result<(), PhysicsError> {
-        self.dispatch(1, false)
+        self.dispatch(1, None)
     }
 
     fn step_n(&mut self, n: usize) -> Result<(), PhysicsError> {
@@ -716,7 +726,7 @@ impl PhysicsBackend for WgpuBackend {
         }
         let n = u32::try_from(n)
             .map_err(|_| PhysicsError::InvalidInput(format!("{n} steps in one call")))?;
-        self.dispatch(n, false)
+        self.dispatch(n, None)
     }
 
     fn articulation(&self, a: usize) -> ArticulationView<'_> {
@@ -843,7 +853,7 @@ impl PhysicsBackend for WgpuBackend {
         }
         self.mark(self.buffers.mass_scale, self.buffers.num_envs * bodies);
         // Bias forces depend on the masses: republish.
-        self.dispatch(0, false)
+        self.dispatch(0, None)
     }
 
     fn set_friction(
@@ -914,9 +924,11 @@ mod tests {
         let mut root = RootState::default();
         root.pose.pos = Vec3::new(0.4, 0.1, 0.3);
         b.write_root_state(0, &ids[1..3], &[root; 2]).unwrap();
+        // The root write read the joint write's rows back before changing two of them, and
+        // republished only those two.
         assert!(
-            matches!(&b.stale, Stale::Envs(e) if e.len() == 5),
-            "only the envs written since the last step are stale"
+            matches!(&b.stale, Stale::Envs(e) if e[..] == [17, 40]),
+            "only the envs of the last write are stale"
         );
         let gathered: Vec<u32> = b.state_f32().iter().map(|x| x.to_bits()).collect();
         let mut whole = vec![Vec4::ZERO; b.buffers.state_len.div_ceil(4)];
