@@ -71,3 +71,8 @@ fn a_write_replaces_only_what_it_names() {
 fn batched_writes_equal_single_writes() {
     orbit_conformance::batched_writes_equal_single_writes(BACKEND_NAME);
 }
+
+#[test]
+fn a_mass_change_touches_only_its_envs() {
+    orbit_conformance::a_mass_change_touches_only_its_envs(BACKEND_NAME);
+}

@@ -134,7 +134,7 @@ impl Gen<'_> {
             ),
         );
         c(self, "MARGIN", f(CONTACT_MARGIN));
-        c(self, "WRITTEN", f(layout::WRITTEN));
+        c(self, "REPUBLISH", f(layout::REPUBLISH));
         let contact = &sim.contact;
         // MuJoCo's rows (`normal_row` in step.wgsl); the soft step's as its target and
         // regulariser scales.

@@ -11,12 +11,12 @@ use crate::compile::{CompiledScene, MAX_CONTACTS};
 /// An env's fresh input ([`BufferLayout::fresh`]) when its state has not been written since the
 /// last step.
 pub const NOT_FRESH: f32 = 0.0;
-/// The fresh input of an env written since the last step: that step's first substep drops the
-/// env's warm starts.
+/// The fresh input of an env written since the last step: that step's dispatch (all its
+/// substeps) runs the env's solver without warm starts.
 pub const FRESH: f32 = 1.0;
-/// The fresh input of an env written by the write now being republished (fresh as well): a
-/// republish after a write publishes only these envs.
-pub const WRITTEN: f32 = 2.0;
+/// Added to the fresh input of the envs a republish publishes, for that dispatch only (the
+/// others return at once); subtracted again after it, which restores the flag exactly.
+pub const REPUBLISH: f32 = 2.0;
 
 /// Float offsets of one articulation's sections in the state and input buffers.
 #[derive(Clone, Debug)]
@@ -86,8 +86,8 @@ pub struct BufferLayout {
     pub mass_scale: usize,
     /// Inputs: per-env friction of each shape (`num_envs × shapes`).
     pub friction: usize,
-    /// Inputs: per-env fresh flag, [`NOT_FRESH`], [`FRESH`] (state written since the last step:
-    /// do not warm-start) or [`WRITTEN`].
+    /// Inputs: per-env fresh flag, [`NOT_FRESH`] or [`FRESH`] (state written since the last
+    /// step: do not warm-start), plus [`REPUBLISH`] during a republish of some envs.
     pub fresh: usize,
     /// Inputs: per dof (all envs), 1 where the bias forces are added to the effort input.
     pub compensate: usize,

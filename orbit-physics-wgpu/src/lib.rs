@@ -32,7 +32,7 @@ pub use gpu::{Gpu, gpu};
 
 use compile::CompiledScene;
 use gather::RowGather;
-use layout::{BufferLayout, FRESH, NOT_FRESH, WRITTEN};
+use layout::{BufferLayout, FRESH, NOT_FRESH, REPUBLISH};
 use mirror::HostMirror;
 
 /// Name under which this backend is registered.
@@ -79,8 +79,8 @@ pub struct WgpuBackend {
     /// Ranges of `inputs` written since the last upload (only those are sent: per-step targets
     /// and efforts, not the per-env parameters that rarely change).
     dirty: Vec<std::ops::Range<usize>>,
-    /// Envs flagged fresh (state written) since the last step: the next step's first substep
-    /// drops their warm starts.
+    /// Envs flagged fresh (state written) since the last step: the next step runs their solver
+    /// without warm starts.
     fresh_envs: Vec<usize>,
     /// Default masses of links then objects, for mass scales.
     default_masses: Vec<f32>,
@@ -502,7 +502,7 @@ impl WgpuBackend {
     }
 
     /// Runs `substeps` substeps (0: only recompute what is published, for the envs `written`
-    /// if given, flagged [`WRITTEN`] in the fresh input; else for all); the host mirror reads
+    /// if given, flagged with [`REPUBLISH`] by [`republish`](Self::republish); else for all); the host mirror reads
     /// the published state back when it is next looked at.
     fn dispatch(&mut self, substeps: u32, written: Option<&[usize]>) -> Result<(), PhysicsError> {
         let written = written.filter(|_| substeps == 0);
@@ -589,34 +589,44 @@ impl WgpuBackend {
     }
 
     /// After a state write to `sections` (see [`upload_state_rows`](Self::upload_state_rows)):
-    /// upload those rows, flag the envs fresh (the next step drops their warm starts) and
-    /// republish the envs of this write. Only they are republished, so that only their rows
-    /// are read back and every other env's state stays as it was, envs written earlier in the
-    /// same step included (a republish normalises quaternions and moves velocities to the
-    /// centre of mass and back, which can move the last bits of a state it republishes again).
+    /// upload those rows, flag the envs fresh (the next step runs them without warm starts) and
+    /// republish the envs of this write.
     fn after_write(
         &mut self,
         env_ids: &[usize],
         sections: &[(usize, usize)],
     ) -> Result<(), PhysicsError> {
+        let fresh = self.buffers.fresh;
+        for &e in env_ids {
+            if self.inputs[fresh + e] == NOT_FRESH {
+                self.inputs[fresh + e] = FRESH;
+                self.fresh_envs.push(e);
+            }
+        }
+        self.upload_state_rows(env_ids, sections);
+        self.republish(env_ids)
+    }
+
+    /// Republishes `env_ids` only, so that only their rows are read back and every other env's
+    /// state stays as it was, envs written earlier in the same step included (a republish
+    /// normalises quaternions and moves velocities to the centre of mass and back, which can
+    /// move the last bits of a state it republishes again). Their fresh flags carry
+    /// [`REPUBLISH`] for the dispatch and are restored after it, also when it fails.
+    fn republish(&mut self, env_ids: &[usize]) -> Result<(), PhysicsError> {
         let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
             return Ok(());
         };
         let fresh = self.buffers.fresh;
         for &e in env_ids {
-            if self.inputs[fresh + e] == NOT_FRESH {
-                self.fresh_envs.push(e);
-            }
-            self.inputs[fresh + e] = WRITTEN;
+            self.inputs[fresh + e] += REPUBLISH;
         }
         self.mark(fresh + lo, hi - lo + 1);
-        self.upload_state_rows(env_ids, sections);
-        self.dispatch(0, Some(env_ids))?;
+        let published = self.dispatch(0, Some(env_ids));
         for &e in env_ids {
-            self.inputs[fresh + e] = FRESH;
+            self.inputs[fresh + e] -= REPUBLISH;
         }
         self.mark(fresh + lo, hi - lo + 1);
-        Ok(())
+        published
     }
 
     fn check_articulation(&self, a: usize) -> Result<layout::ArticulationOffsets, PhysicsError> {
@@ -852,8 +862,8 @@ impl PhysicsBackend for WgpuBackend {
             self.inputs[self.buffers.mass_scale + e * bodies + b] = m / default;
         }
         self.mark(self.buffers.mass_scale, self.buffers.num_envs * bodies);
-        // Bias forces depend on the masses: republish.
-        self.dispatch(0, None)
+        // Bias forces depend on the masses: republish the envs whose masses changed.
+        self.republish(env_ids)
     }
 
     fn set_friction(

@@ -130,3 +130,10 @@ fn batched_writes_equal_single_writes() {
         orbit_conformance::batched_writes_equal_single_writes(BACKEND_NAME);
     }
 }
+
+#[test]
+fn a_mass_change_touches_only_its_envs() {
+    if gpu_available() {
+        orbit_conformance::a_mass_change_touches_only_its_envs(BACKEND_NAME);
+    }
+}
