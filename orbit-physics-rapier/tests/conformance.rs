@@ -76,3 +76,8 @@ fn batched_writes_equal_single_writes() {
 fn a_mass_change_touches_only_its_envs() {
     orbit_conformance::a_mass_change_touches_only_its_envs(BACKEND_NAME);
 }
+
+#[test]
+fn substeps_after_a_write_do_not_depend_on_dispatch() {
+    orbit_conformance::substeps_after_a_write_do_not_depend_on_dispatch(BACKEND_NAME);
+}

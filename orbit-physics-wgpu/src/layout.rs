@@ -11,8 +11,8 @@ use crate::compile::{CompiledScene, MAX_CONTACTS};
 /// An env's fresh input ([`BufferLayout::fresh`]) when its state has not been written since the
 /// last step.
 pub const NOT_FRESH: f32 = 0.0;
-/// The fresh input of an env written since the last step: that step's dispatch (all its
-/// substeps) runs the env's solver without warm starts.
+/// The fresh input of an env written since the last step: that step's first substep runs the
+/// env's solver without warm starts.
 pub const FRESH: f32 = 1.0;
 /// Added to the fresh input of the envs a republish publishes, for that dispatch only (the
 /// others return at once); subtracted again after it, which restores the flag exactly.

@@ -79,8 +79,8 @@ pub struct WgpuBackend {
     /// Ranges of `inputs` written since the last upload (only those are sent: per-step targets
     /// and efforts, not the per-env parameters that rarely change).
     dirty: Vec<std::ops::Range<usize>>,
-    /// Envs flagged fresh (state written) since the last step: the next step runs their solver
-    /// without warm starts.
+    /// Envs flagged fresh (state written) since the last step: the next step's first substep
+    /// runs their solver without warm starts.
     fresh_envs: Vec<usize>,
     /// Default masses of links then objects, for mass scales.
     default_masses: Vec<f32>,
@@ -589,8 +589,8 @@ impl WgpuBackend {
     }
 
     /// After a state write to `sections` (see [`upload_state_rows`](Self::upload_state_rows)):
-    /// upload those rows, flag the envs fresh (the next step runs them without warm starts) and
-    /// republish the envs of this write.
+    /// upload those rows, flag the envs fresh (the next step's first substep runs them without
+    /// warm starts) and republish the envs of this write.
     fn after_write(
         &mut self,
         env_ids: &[usize],

@@ -44,6 +44,9 @@ const LIMIT_SLOT: u32 = 0x40000000u;
 
 var<private> env: u32;
 var<private> num_envs: u32;
+// Whether the substep running is the first of this dispatch (a written env skips the warm
+// start of that one only).
+var<private> first_substep: bool;
 // Articulation state and kinematics (indexed by constants only).
 var<private> q: array<f32, ND1>;
 var<private> qd: array<f32, ND1>;
@@ -929,10 +932,10 @@ fn warm_find(slot: u32) -> u32 {
 }
 
 // Applies last substep's impulses to the constraints with the same slot (contacts store their
-// normal and both tangents, limit rows their normal entry).
+// normal and both tangents, limit rows their normal entry). An env written since the last
+// step has no last substep to warm-start from in its first.
 fn warm_start() {
-    let fresh = inp[lay[LAY_IN_FRESH] + env] != 0.0;
-    if fresh {
+    if first_substep && inp[lay[LAY_IN_FRESH] + env] != 0.0 {
         return;
     }
     for (var c = 0u; c < nc; c++) {
@@ -1096,6 +1099,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         load_applied();
     }
     for (var s = 0u; s < params.substeps; s++) {
+        first_substep = s == 0u;
         substep();
     }
     publish();

@@ -137,3 +137,10 @@ fn a_mass_change_touches_only_its_envs() {
         orbit_conformance::a_mass_change_touches_only_its_envs(BACKEND_NAME);
     }
 }
+
+#[test]
+fn substeps_after_a_write_do_not_depend_on_dispatch() {
+    if gpu_available() {
+        orbit_conformance::substeps_after_a_write_do_not_depend_on_dispatch(BACKEND_NAME);
+    }
+}
