@@ -96,7 +96,8 @@ pub struct WgpuBackend {
 enum Stale {
     /// Every env (a step ran, or a republish of all envs).
     All,
-    /// Only these envs were republished (after a state write); every other row is current.
+    /// Only these envs were republished (after a state write or a mass change); every other
+    /// row is current.
     Envs(Vec<u32>),
 }
 
@@ -501,11 +502,11 @@ impl WgpuBackend {
         self.dirty.push(start..start + len);
     }
 
-    /// Runs `substeps` substeps (0: only recompute what is published, for the envs `written`
-    /// if given, flagged with [`REPUBLISH`] by [`republish`](Self::republish); else for all); the host mirror reads
-    /// the published state back when it is next looked at.
-    fn dispatch(&mut self, substeps: u32, written: Option<&[usize]>) -> Result<(), PhysicsError> {
-        let written = written.filter(|_| substeps == 0);
+    /// Runs `substeps` substeps (0: only recompute what is published, for the envs `marked` if
+    /// given, which [`republish`](Self::republish) flagged with [`REPUBLISH`]; else for all).
+    /// The host mirror reads the published state back when it is next looked at.
+    fn dispatch(&mut self, substeps: u32, marked: Option<&[usize]>) -> Result<(), PhysicsError> {
+        let marked = marked.filter(|_| substeps == 0);
         self.upload_inputs();
         // Steps (not republishes) are timed.
         let timer = self.timer.as_ref().filter(|_| substeps > 0);
@@ -514,7 +515,7 @@ impl WgpuBackend {
         queue.write_buffer(
             &self.params_buf,
             0,
-            bytemuck::cast_slice(&[substeps, u32::from(written.is_some()), 0, 0]),
+            bytemuck::cast_slice(&[substeps, u32::from(marked.is_some()), 0, 0]),
         );
         let device = &gpu.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -544,7 +545,7 @@ impl WgpuBackend {
         if timer.is_some() {
             self.timed = true;
         }
-        self.mark_stale(written);
+        self.mark_stale(marked);
         self.wait_for_pending()?;
         self.pending = Some(submitted);
         // Fresh flags last until a step has consumed them (its first substep skips the warm
@@ -559,11 +560,11 @@ impl WgpuBackend {
         Ok(())
     }
 
-    /// Records what a dispatch makes stale: the envs `written` if it republished only those,
+    /// Records what a dispatch makes stale: the envs `marked` if it republished only those,
     /// else every env.
-    fn mark_stale(&mut self, written: Option<&[usize]>) {
+    fn mark_stale(&mut self, marked: Option<&[usize]>) {
         let previous = std::mem::replace(&mut self.stale, Stale::All);
-        let ids = written.map(|ids| ids.iter().map(|&e| e as u32));
+        let ids = marked.map(|ids| ids.iter().map(|&e| e as u32));
         let stale = match (ids, previous) {
             (Some(ids), _) if self.state.is_current() => Stale::Envs(ids.collect()),
             (Some(ids), Stale::Envs(mut earlier)) => {
@@ -913,20 +914,41 @@ pub fn gpu_available_for_tests() -> bool {
 mod tests {
     use super::*;
 
-    /// After a reset of a few envs the host mirror reads back only their rows; it must then
-    /// hold exactly what a read of the whole state gives, in every section.
-    #[test]
-    fn reading_back_the_reset_rows_gives_the_whole_state() {
+    /// The box-pushing scene on `n` envs after one env step under fixed efforts, synchronised;
+    /// None without a GPU.
+    fn stepped_box_pushing(n: usize) -> Option<(SceneDesc, WgpuBackend)> {
         if !gpu_available_for_tests() {
-            return;
+            return None;
         }
         let scene = orbit_assets::box_pushing_scene(&[]).expect("bundled scene");
-        let n = 64;
         let mut b = WgpuBackend::new(&scene, n, &SimCfg::default()).expect("backend");
         let efforts: Vec<f32> = (0..n * 7).map(|i| ((i % 13) as f32 - 6.0) * 0.5).collect();
         b.set_joint_efforts(0, &efforts).unwrap();
         b.step_n(10).unwrap();
         b.sync();
+        Some((scene, b))
+    }
+
+    /// Asserts that the host mirror (refreshed as a reader would) holds, bit for bit, what a
+    /// read of the whole state gives.
+    fn assert_mirror_is_whole_state(b: &mut WgpuBackend) {
+        let mirror: Vec<u32> = b.state_f32().iter().map(|x| x.to_bits()).collect();
+        let mut whole = vec![Vec4::ZERO; b.buffers.state_len.div_ceil(4)];
+        b.read_back_all(&mut whole);
+        let whole: Vec<u32> = bytemuck::cast_slice::<Vec4, f32>(&whole)
+            .iter()
+            .map(|x| x.to_bits())
+            .collect();
+        assert_eq!(mirror, whole);
+    }
+
+    /// After a reset of a few envs the host mirror reads back only their rows; it must then
+    /// hold exactly what a read of the whole state gives, in every section.
+    #[test]
+    fn reading_back_the_reset_rows_gives_the_whole_state() {
+        let Some((_, mut b)) = stepped_box_pushing(64) else {
+            return;
+        };
         let ids = [3, 17, 40, 41, 63];
         let pos: Vec<f32> = (0..ids.len() * 7).map(|i| 0.01 * i as f32).collect();
         b.write_joint_state(0, &ids, &pos, &vec![0.1; ids.len() * 7])
@@ -940,15 +962,33 @@ mod tests {
             matches!(&b.stale, Stale::Envs(e) if e[..] == [17, 40]),
             "only the envs of the last write are stale"
         );
-        let gathered: Vec<u32> = b.state_f32().iter().map(|x| x.to_bits()).collect();
-        let mut whole = vec![Vec4::ZERO; b.buffers.state_len.div_ceil(4)];
-        b.read_back_all(&mut whole);
-        let whole: Vec<u32> = bytemuck::cast_slice::<Vec4, f32>(&whole)
-            .iter()
-            .map(|x| x.to_bits())
-            .collect();
-        assert_eq!(gathered, whole);
+        assert_mirror_is_whole_state(&mut b);
         assert_eq!(b.articulation(0).joint_pos[17 * 7 + 3], pos[7 + 3]);
         assert_eq!(b.rigid_object(0).pos[40], root.pose.pos);
+    }
+
+    /// A mass change republishes its env at once (the bias forces follow the new mass) and
+    /// leaves the host mirror exactly what a read of the whole state gives.
+    #[test]
+    fn a_mass_change_republishes_its_env() {
+        let n = 16;
+        let Some((scene, mut b)) = stepped_box_pushing(n) else {
+            return;
+        };
+        let links = &scene.articulations[0].model.links;
+        let link = links.iter().rposition(|l| l.inertial.mass > 0.0).unwrap();
+        let hand = BodyRef::Link {
+            articulation: 0,
+            link,
+        };
+        let before = b.articulation(0).bias_forces.to_vec();
+        b.set_masses(hand, &[5], &[3.0 * links[link].inertial.mass])
+            .unwrap();
+        let after = b.articulation(0).bias_forces.to_vec();
+        for e in 0..n {
+            let moved = before[e * 7..e * 7 + 7] != after[e * 7..e * 7 + 7];
+            assert_eq!(moved, e == 5, "env {e}'s bias forces");
+        }
+        assert_mirror_is_whole_state(&mut b);
     }
 }

@@ -23,7 +23,7 @@ struct Params {
     substeps: u32,
     // With no substeps: 1 to publish only the envs whose fresh input has REPUBLISH added
     // (the others keep their published state untouched), 0 to publish every env.
-    only_written: u32,
+    only_marked: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -1089,7 +1089,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if env >= num_envs {
         return;
     }
-    if params.substeps == 0u && params.only_written != 0u && inp[lay[LAY_IN_FRESH] + env] < REPUBLISH {
+    if params.substeps == 0u && params.only_marked != 0u && inp[lay[LAY_IN_FRESH] + env] < REPUBLISH {
         return;
     }
     load_state();
