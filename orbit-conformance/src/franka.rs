@@ -672,6 +672,22 @@ pub fn a_write_replaces_only_what_it_names_with(settings: &orbit_core::physics::
     println!("a_write_replaces_only_what_it_names[{backend}]: 10 steps bit-identical");
 }
 
+/// Env `e`'s box for the write facts: `start` lifted 2 cm, tilted and spinning fast, with a
+/// yaw and velocities that differ per env. A GPU republish (it normalises the quaternion and
+/// moves the velocity to the centre of mass and back) does not always reproduce such a state
+/// bit for bit, so republishing an env twice shows.
+fn spinning_box(start: &orbit_core::scene::RootState, e: usize) -> orbit_core::scene::RootState {
+    let k = e as f32;
+    orbit_core::scene::RootState {
+        pose: Pose::new(
+            start.pose.pos + glam::Vec3::new(0.0, 0.0, 0.02),
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.05, -0.03, 0.1 * k) * start.pose.rot,
+        ),
+        lin_vel: glam::Vec3::new(0.37, 0.013 * k, -0.21),
+        ang_vel: glam::Vec3::new(3.1, -2.3, 5.7 + 0.01 * k),
+    }
+}
+
 /// Writing several envs in one call equals writing them one at a time: 64 envs take 5 steps
 /// with efforts that differ per env, then the arm and the box of envs 0, 21 and 63 are written
 /// in one call each, or env by env in a second backend; every env's state is then the same, bit
@@ -692,24 +708,10 @@ pub fn batched_writes_equal_single_writes(backend: &str) {
         })
         .collect();
     let qd = vec![0.1; ids.len() * 7];
-    // Tilted, spinning boxes, whose republish is not exact (it normalises the quaternion and
-    // moves the velocity to the centre of mass and back): a write must republish only its own
+    // Tilted, spinning boxes, whose republish is not exact: a write must republish only its own
     // envs, or the envs written one at a time, republished again by each later write, drift.
     let start = scene.rigid_objects[0].default_root_state;
-    let boxes: Vec<_> = ids
-        .iter()
-        .map(|&e| {
-            let tilt = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.05, -0.03, 0.1 * e as f32);
-            orbit_core::scene::RootState {
-                pose: Pose::new(
-                    start.pose.pos + glam::Vec3::new(0.0, 0.0, 0.02),
-                    tilt * start.pose.rot,
-                ),
-                lin_vel: glam::Vec3::new(0.37, 0.013 * e as f32, -0.21),
-                ang_vel: glam::Vec3::new(3.1, -2.3, 5.7 + 0.01 * e as f32),
-            }
-        })
-        .collect();
+    let boxes: Vec<_> = ids.iter().map(|&e| spinning_box(&start, e)).collect();
     let states = |batched: bool| {
         let mut sim = orbit_core::physics::build_backend(&scene, n, &settings).expect("build");
         run_with_efforts(&mut *sim, 0..5, 2.0, 1.0);
@@ -817,21 +819,7 @@ pub fn a_mass_change_touches_only_its_envs(backend: &str) {
     let n = 16;
     let start = scene.rigid_objects[0].default_root_state;
     let others: Vec<usize> = (0..n).filter(|&e| e != 5).collect();
-    let spinning: Vec<_> = others
-        .iter()
-        .map(|&e| {
-            let k = e as f32;
-            orbit_core::scene::RootState {
-                pose: Pose::new(
-                    start.pose.pos + glam::Vec3::new(0.0, 0.0, 0.02),
-                    glam::Quat::from_euler(glam::EulerRot::XYZ, 0.05, -0.03, 0.3 * k)
-                        * start.pose.rot,
-                ),
-                lin_vel: glam::Vec3::new(0.37, 0.05 * k, -0.21),
-                ang_vel: glam::Vec3::new(3.1, -2.3 + 0.1 * k, 5.7),
-            }
-        })
-        .collect();
+    let spinning: Vec<_> = others.iter().map(|&e| spinning_box(&start, e)).collect();
     let run = |scales: &[f32]| {
         let mut sim = orbit_core::physics::build_backend(&scene, n, &settings).expect("build");
         run_with_efforts(&mut *sim, 0..3, 2.0, 1.0);
