@@ -385,9 +385,10 @@ impl WgpuBackend {
         self.staging.unmap();
     }
 
-    /// Waits for the dispatch before the one just submitted (see `dispatch`).
-    fn wait_for_pending(&mut self) -> Result<(), PhysicsError> {
-        if let Some(index) = self.pending.take() {
+    /// Waits for the submission `index` (the dispatch before the one just submitted, see
+    /// `dispatch`), if any.
+    fn wait_for(&self, index: Option<wgpu::SubmissionIndex>) -> Result<(), PhysicsError> {
+        if let Some(index) = index {
             self.gpu
                 .device
                 .poll(wgpu::PollType::Wait {
@@ -502,6 +503,14 @@ impl WgpuBackend {
         self.dirty.push(start..start + len);
     }
 
+    /// Marks the rows of `env_ids` in the per-env input section at `section` (`per_env`
+    /// values per env) for the next upload: the span from the lowest to the highest.
+    fn mark_env_rows(&mut self, section: usize, per_env: usize, env_ids: &[usize]) {
+        if let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) {
+            self.mark(section + lo * per_env, (hi - lo + 1) * per_env);
+        }
+    }
+
     /// Runs `substeps` substeps (0: only recompute what is published, for the envs `marked` if
     /// given, which [`republish`](Self::republish) flagged with [`REPUBLISH`]; else for all).
     /// The host mirror reads the published state back when it is next looked at.
@@ -546,10 +555,10 @@ impl WgpuBackend {
             self.timed = true;
         }
         self.mark_stale(marked);
-        self.wait_for_pending()?;
-        self.pending = Some(submitted);
+        let previous = self.pending.replace(submitted);
         // Fresh flags last until a step has consumed them (its first substep skips the warm
-        // start); a republish leaves them set.
+        // start); a republish leaves them set. The submitted step consumes them whether or
+        // not the wait below succeeds.
         if substeps > 0 && !self.fresh_envs.is_empty() {
             let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
             for e in self.fresh_envs.drain(..) {
@@ -557,7 +566,7 @@ impl WgpuBackend {
             }
             self.mark(fresh, n);
         }
-        Ok(())
+        self.wait_for(previous)
     }
 
     /// Records what a dispatch makes stale: the envs `marked` if it republished only those,
@@ -614,19 +623,19 @@ impl WgpuBackend {
     /// move the last bits of a state it republishes again). Their fresh flags carry
     /// [`REPUBLISH`] for the dispatch and are restored after it, also when it fails.
     fn republish(&mut self, env_ids: &[usize]) -> Result<(), PhysicsError> {
-        let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
+        if env_ids.is_empty() {
             return Ok(());
-        };
+        }
         let fresh = self.buffers.fresh;
         for &e in env_ids {
             self.inputs[fresh + e] += REPUBLISH;
         }
-        self.mark(fresh + lo, hi - lo + 1);
+        self.mark_env_rows(fresh, 1, env_ids);
         let published = self.dispatch(0, Some(env_ids));
         for &e in env_ids {
             self.inputs[fresh + e] -= REPUBLISH;
         }
-        self.mark(fresh + lo, hi - lo + 1);
+        self.mark_env_rows(fresh, 1, env_ids);
         published
     }
 
@@ -862,7 +871,7 @@ impl PhysicsBackend for WgpuBackend {
         for (&e, &m) in env_ids.iter().zip(masses) {
             self.inputs[self.buffers.mass_scale + e * bodies + b] = m / default;
         }
-        self.mark(self.buffers.mass_scale, self.buffers.num_envs * bodies);
+        self.mark_env_rows(self.buffers.mass_scale, bodies, env_ids);
         // Bias forces depend on the masses: republish the envs whose masses changed.
         self.republish(env_ids)
     }
@@ -884,7 +893,7 @@ impl PhysicsBackend for WgpuBackend {
                 }
             }
         }
-        self.mark(self.buffers.friction, self.buffers.num_envs * shapes);
+        self.mark_env_rows(self.buffers.friction, shapes, env_ids);
         Ok(())
     }
 }
