@@ -185,12 +185,12 @@ impl RowGather {
         sections: &[(usize, usize)],
         state: &[f32],
     ) -> bool {
-        let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
+        let Some(span) = crate::layout::env_rows(0, 1, env_ids) else {
             return true;
         };
         let floats: usize = sections.iter().map(|&(_, w)| w).sum();
         let packed_floats = env_ids.len() * (floats + 1) + 2 * floats;
-        if env_ids.len() > self.max_envs || packed_floats >= (hi - lo + 1) * floats {
+        if env_ids.len() > self.max_envs || packed_floats >= span.len() * floats {
             return false;
         }
         let cols = columns(sections);

@@ -5,6 +5,7 @@
 //! starts at a multiple of 4 floats, so quaternion sections can be viewed as `Quat`s in place.
 
 use std::fmt::Write as _;
+use std::ops::Range;
 
 use crate::compile::{CompiledScene, MAX_CONTACTS};
 
@@ -17,6 +18,14 @@ pub const FRESH: f32 = 1.0;
 /// Added to the fresh input of the envs a republish publishes, for that dispatch only (the
 /// others return at once); subtracted again after it, which restores the flag exactly.
 pub const REPUBLISH: f32 = 2.0;
+
+/// The floats of the rows of `env_ids` in a per-env section that starts at float `section`
+/// with `per_env` floats per env: the span from the lowest env's row to the end of the
+/// highest's (every row in between included); None for no envs.
+pub fn env_rows(section: usize, per_env: usize, env_ids: &[usize]) -> Option<Range<usize>> {
+    let (lo, hi) = (env_ids.iter().min()?, env_ids.iter().max()?);
+    Some(section + lo * per_env..section + (hi + 1) * per_env)
+}
 
 /// Float offsets of one articulation's sections in the state and input buffers.
 #[derive(Clone, Debug)]
@@ -233,4 +242,18 @@ pub fn lay_constants(scene: &CompiledScene) -> String {
     c("LAY_L_BLOCK", 5 + 3 * nd);
     c("LAY_O_BLOCK", 5 + 3 * nd + nl);
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::env_rows;
+
+    /// The span runs from the lowest env's first float to the highest env's last, whatever
+    /// the order of the ids, and covers the rows in between.
+    #[test]
+    fn env_rows_spans_lowest_to_highest_env() {
+        assert_eq!(env_rows(10, 3, &[4, 1, 2]), Some(13..25));
+        assert_eq!(env_rows(0, 7, &[5]), Some(35..42));
+        assert_eq!(env_rows(10, 3, &[]), None);
+    }
 }

@@ -461,11 +461,10 @@ impl WgpuBackend {
         {
             return;
         }
-        let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) else {
-            return;
-        };
         for &(start, width) in sections {
-            let range = start + lo * width..start + (hi + 1) * width;
+            let Some(range) = layout::env_rows(start, width, env_ids) else {
+                return;
+            };
             self.gpu.queue.write_buffer(
                 &self.state_buf,
                 (range.start * 4) as u64,
@@ -506,9 +505,8 @@ impl WgpuBackend {
     /// Marks the rows of `env_ids` in the per-env input section at `section` (`per_env`
     /// values per env) for the next upload: the span from the lowest to the highest.
     fn mark_env_rows(&mut self, section: usize, per_env: usize, env_ids: &[usize]) {
-        if let (Some(&lo), Some(&hi)) = (env_ids.iter().min(), env_ids.iter().max()) {
-            self.mark(section + lo * per_env, (hi - lo + 1) * per_env);
-        }
+        self.dirty
+            .extend(layout::env_rows(section, per_env, env_ids));
     }
 
     /// Runs `substeps` substeps (0: only recompute what is published, for the envs `marked` if
@@ -559,12 +557,13 @@ impl WgpuBackend {
         // Fresh flags last until a step has consumed them (its first substep skips the warm
         // start); a republish leaves them set. The submitted step consumes them whether or
         // not the wait below succeeds.
-        if substeps > 0 && !self.fresh_envs.is_empty() {
-            let (fresh, n) = (self.buffers.fresh, self.buffers.num_envs);
+        if substeps > 0 {
+            let fresh = self.buffers.fresh;
+            let rows = layout::env_rows(fresh, 1, &self.fresh_envs);
             for e in self.fresh_envs.drain(..) {
                 self.inputs[fresh + e] = NOT_FRESH;
             }
-            self.mark(fresh, n);
+            self.dirty.extend(rows);
         }
         self.wait_for(previous)
     }
