@@ -41,35 +41,66 @@ impl Mlp {
     }
 
     /// Applies the network to a batch of rows. Large batches go through as `[chunks, rows,
-    /// features]` batched products (see [`row_chunks`]): the result is the same, but the
-    /// backward pass's weight gradients become many partial products summed afterwards.
+    /// features]` batched products (see [`row_chunks`]): the result is the same up to float
+    /// rounding, but the backward pass's sums over the rows (the weight and bias gradients)
+    /// become many partial sums added afterwards.
     pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
         let [n, d] = x.dims();
         let chunks = row_chunks(n);
-        if chunks > 1 {
-            let y = self.forward_nd(x.reshape([chunks, n / chunks, d]));
-            let out = y.dims()[2];
-            return y.reshape([n, out]);
+        if chunks == 1 {
+            return self.forward_rows(x);
         }
-        self.forward_nd(x)
+        let mut x = x.reshape([chunks, n / chunks, d]);
+        let last = self.layers.len() - 1;
+        for (i, layer) in self.layers.iter().enumerate() {
+            x = chunked_linear(layer, x);
+            if i < last {
+                x = self.activate(x);
+            }
+        }
+        let out = x.dims()[2];
+        x.reshape([n, out])
     }
 
-    fn forward_nd<const D: usize>(&self, mut x: Tensor<D>) -> Tensor<D> {
+    /// The network on `[rows, features]` as one batch, through burn's `Linear`.
+    fn forward_rows(&self, mut x: Tensor<2>) -> Tensor<2> {
         let last = self.layers.len() - 1;
         for (i, layer) in self.layers.iter().enumerate() {
             x = layer.forward(x);
             if i < last {
-                x = match self.activation {
-                    Activation::Elu => elu(x, 1.0, 1.0),
-                    Activation::Selu => elu(x, SELU_SCALE, SELU_SCALE * SELU_ALPHA),
-                    Activation::Relu => activation::relu(x),
-                    Activation::Lrelu => activation::leaky_relu(x, 0.01),
-                    Activation::Tanh => activation::tanh(x),
-                    Activation::Sigmoid => activation::sigmoid(x),
-                };
+                x = self.activate(x);
             }
         }
         x
+    }
+
+    fn activate<const D: usize>(&self, x: Tensor<D>) -> Tensor<D> {
+        match self.activation {
+            Activation::Elu => elu(x, 1.0, 1.0),
+            Activation::Selu => elu(x, SELU_SCALE, SELU_SCALE * SELU_ALPHA),
+            Activation::Relu => activation::relu(x),
+            Activation::Lrelu => activation::leaky_relu(x, 0.01),
+            Activation::Tanh => activation::tanh(x),
+            Activation::Sigmoid => activation::sigmoid(x),
+        }
+    }
+}
+
+/// `x·W + b` for `x` of shape `[chunks, rows, d_in]`, with the bias first spread over the
+/// chunks (`[chunks, 1, d_out]`). The bias gradient is then a sum over each chunk's rows
+/// (`chunks × d_out` sums, in parallel) followed by a small sum over the chunks. burn's
+/// `Linear` sums all rows into the `d_out` outputs in one reduction, which a GPU runs with
+/// `d_out` outputs' worth of parallelism: at 393 216 rows on an H100 that took 3.5 ms per
+/// 128- or 256-wide layer, a third of a gradient step (docs/benchmarks.md).
+fn chunked_linear(layer: &Linear, x: Tensor<3>) -> Tensor<3> {
+    let chunks = x.dims()[0];
+    let y = burn::tensor::module::linear(x, layer.weight.val(), None);
+    match &layer.bias {
+        Some(bias) => {
+            let d_out = bias.dims()[0];
+            y + bias.val().reshape([1, 1, d_out]).expand([chunks, 1, d_out])
+        }
+        None => y,
     }
 }
 
@@ -78,7 +109,8 @@ impl Mlp {
 /// `d_in × d_out` product over all `n` rows, which a GPU matmul kernel tiles over its output
 /// only, so a few workgroups do all the work. As a batched product each chunk gets its own
 /// workgroups and the partial gradients are summed afterwards ("split-K"); at 65 536 envs this
-/// halves the update on an H100 (docs/benchmarks.md).
+/// halves the update on an H100. The bias gradients are split the same way
+/// ([`chunked_linear`]; docs/benchmarks.md).
 fn row_chunks(n: usize) -> usize {
     const MAX_CHUNKS: usize = 256;
     const MIN_ROWS: usize = 1024;
@@ -216,8 +248,8 @@ mod tests {
         assert_eq!(row_chunks(1_001), 1);
     }
 
-    /// The chunked forward pass gives the rows and weight gradients of the plain one (to
-    /// float rounding: the gradient sums its rows in another order).
+    /// The chunked forward pass gives the rows, weight and bias gradients of the plain one (to
+    /// float rounding: the gradients sum their rows in another order).
     #[test]
     fn chunked_forward_matches_plain() {
         let device = Device::flex().autodiff();
@@ -228,7 +260,7 @@ mod tests {
         let x = Tensor::<2>::from_data(TensorData::new(data, [n, 5]), &device);
         assert_eq!(row_chunks(n), 4);
         let chunked = mlp.forward(x.clone());
-        let plain = mlp.forward_nd(x);
+        let plain = mlp.forward_rows(x);
         let a: Vec<f32> = chunked.clone().into_data().try_into_vec().unwrap();
         let b: Vec<f32> = plain.clone().into_data().try_into_vec().unwrap();
         let worst = a
@@ -237,21 +269,34 @@ mod tests {
             .map(|(p, q)| (p - q).abs())
             .fold(0.0, f32::max);
         assert!(worst < 1e-5, "outputs differ by {worst}");
-        let weight = |y: Tensor<2>| -> Vec<f32> {
+        // Every layer's weight and bias gradients, in order.
+        let gradients = |y: Tensor<2>| -> Vec<Vec<f32>> {
             let grads = y.powf_scalar(2.0).sum().backward();
-            let w = mlp.layers[0].weight.val();
-            w.grad(&grads).unwrap().into_data().try_into_vec().unwrap()
+            let values = |g: Option<Tensor<2>>| -> Vec<f32> {
+                g.unwrap().into_data().try_into_vec().unwrap()
+            };
+            mlp.layers
+                .iter()
+                .flat_map(|l| {
+                    let bias = l.bias.as_ref().unwrap().val().grad(&grads);
+                    [
+                        values(l.weight.val().grad(&grads)),
+                        values(bias.map(|b| b.unsqueeze())),
+                    ]
+                })
+                .collect()
         };
-        let (ga, gb) = (weight(chunked), weight(plain));
-        let scale = gb.iter().fold(0.0f32, |m, g| m.max(g.abs()));
-        let worst = ga
-            .iter()
-            .zip(&gb)
-            .map(|(p, q)| (p - q).abs())
-            .fold(0.0, f32::max);
-        assert!(
-            worst < 1e-5 * scale,
-            "gradients differ by {worst} (scale {scale})"
-        );
+        for (ga, gb) in gradients(chunked).iter().zip(&gradients(plain)) {
+            let scale = gb.iter().fold(0.0f32, |m, g| m.max(g.abs()));
+            let worst = ga
+                .iter()
+                .zip(gb)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f32::max);
+            assert!(
+                scale > 0.0 && worst < 1e-5 * scale,
+                "gradients differ by {worst} (scale {scale})"
+            );
+        }
     }
 }
