@@ -50,23 +50,25 @@ impl Mlp {
         if chunks == 1 {
             return self.forward_rows(x);
         }
-        let mut x = x.reshape([chunks, n / chunks, d]);
-        let last = self.layers.len() - 1;
-        for (i, layer) in self.layers.iter().enumerate() {
-            x = chunked_linear(layer, x);
-            if i < last {
-                x = self.activate(x);
-            }
-        }
-        let out = x.dims()[2];
-        x.reshape([n, out])
+        let y = self.apply(x.reshape([chunks, n / chunks, d]), chunked_linear);
+        let out = y.dims()[2];
+        y.reshape([n, out])
     }
 
     /// The network on `[rows, features]` as one batch, through burn's `Linear`.
-    fn forward_rows(&self, mut x: Tensor<2>) -> Tensor<2> {
+    fn forward_rows(&self, x: Tensor<2>) -> Tensor<2> {
+        self.apply(x, |layer, x| layer.forward(x))
+    }
+
+    /// The layers in order, each through `linear`, with the activation between them.
+    fn apply<const D: usize>(
+        &self,
+        mut x: Tensor<D>,
+        linear: impl Fn(&Linear, Tensor<D>) -> Tensor<D>,
+    ) -> Tensor<D> {
         let last = self.layers.len() - 1;
         for (i, layer) in self.layers.iter().enumerate() {
-            x = layer.forward(x);
+            x = linear(layer, x);
             if i < last {
                 x = self.activate(x);
             }
@@ -74,6 +76,7 @@ impl Mlp {
         x
     }
 
+    /// The configured activation, element-wise.
     fn activate<const D: usize>(&self, x: Tensor<D>) -> Tensor<D> {
         match self.activation {
             Activation::Elu => elu(x, 1.0, 1.0),
@@ -248,6 +251,15 @@ mod tests {
         assert_eq!(row_chunks(1_001), 1);
     }
 
+    /// The largest `|a[i] − b[i]|`.
+    fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
+        assert_eq!(a.len(), b.len());
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f32::max)
+    }
+
     /// The chunked forward pass gives the rows, weight and bias gradients of the plain one (to
     /// float rounding: the gradients sum their rows in another order).
     #[test]
@@ -263,11 +275,7 @@ mod tests {
         let plain = mlp.forward_rows(x);
         let a: Vec<f32> = chunked.clone().into_data().try_into_vec().unwrap();
         let b: Vec<f32> = plain.clone().into_data().try_into_vec().unwrap();
-        let worst = a
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p - q).abs())
-            .fold(0.0, f32::max);
+        let worst = max_abs_diff(&a, &b);
         assert!(worst < 1e-5, "outputs differ by {worst}");
         // Every layer's weight and bias gradients, in order.
         let gradients = |y: Tensor<2>| -> Vec<Vec<f32>> {
@@ -288,11 +296,7 @@ mod tests {
         };
         for (ga, gb) in gradients(chunked).iter().zip(&gradients(plain)) {
             let scale = gb.iter().fold(0.0f32, |m, g| m.max(g.abs()));
-            let worst = ga
-                .iter()
-                .zip(gb)
-                .map(|(p, q)| (p - q).abs())
-                .fold(0.0, f32::max);
+            let worst = max_abs_diff(ga, gb);
             assert!(
                 scale > 0.0 && worst < 1e-5 * scale,
                 "gradients differ by {worst} (scale {scale})"
