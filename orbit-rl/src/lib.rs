@@ -10,6 +10,7 @@
 
 #![warn(missing_docs)]
 
+pub mod adam;
 pub mod black_box;
 pub mod cfg;
 mod error;

@@ -9,12 +9,13 @@ use std::f32::consts::PI;
 use std::path::Path;
 
 use burn::module::{Module, ModuleVisitor, Param};
-use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::optim::GradientsParams;
 use burn::tensor::{Device, Int, Tensor, TensorData};
 use orbit_core::parallel::{MIN_ENVS_PER_COPY_TASK, MIN_ENVS_PER_TASK, first_non_finite};
 use orbit_core::rng::EnvRng;
 use rayon::prelude::*;
 
+use crate::adam::Adam;
 use crate::cfg::{GradClip, PpoCfg, Schedule};
 use crate::model::ActorCritic;
 use crate::normalizer::EmpiricalNormalizer;
@@ -38,15 +39,15 @@ pub struct Ppo {
     pub cfg: PpoCfg,
     /// The actor-critic being trained.
     pub model: ActorCritic,
-    /// The current learning rate (the adaptive schedule changes it; it persists across
-    /// iterations).
-    pub learning_rate: f64,
+    /// The learning rate as of the last update (the adaptive schedule changes it on the
+    /// device; it persists across iterations).
+    learning_rate: f64,
     /// This iteration's transitions.
     pub storage: RolloutStorage,
     /// Running statistics of the returns when `normalize_value` is set: the critic's output
     /// is a normalised value, denormalised by these statistics.
     pub value_normalizer: Option<EmpiricalNormalizer>,
-    optimizer: ModuleOptimizer,
+    optimizer: Adam,
     device: Device,
     seed: u64,
     /// Per-env action-noise streams: each env's samples depend only on the seed, the env and
@@ -61,11 +62,6 @@ pub struct Ppo {
     /// The action standard deviation during the current rollout.
     sigma: Vec<f32>,
     updates: u32,
-}
-
-/// Adam with PyTorch's ε (burn's default is 1e-5).
-fn adam() -> ModuleOptimizer {
-    AdamConfig::new().with_epsilon(1e-8).init()
 }
 
 /// A `[rows, cols]` tensor from row-major values.
@@ -108,7 +104,7 @@ impl Ppo {
         device: Device,
     ) -> Self {
         let (num_obs, num_critic_obs, num_actions) = dims;
-        let optimizer = adam();
+        let optimizer = Adam::new(cfg.learning_rate, &device);
         let noise = (0..num_envs)
             .map(|e| EnvRng::new(seed, e as u32, streams::ACTION_NOISE))
             .collect();
@@ -134,6 +130,18 @@ impl Ppo {
     /// The device the network lives on.
     pub fn device(&self) -> &Device {
         &self.device
+    }
+
+    /// The learning rate as of the last update.
+    pub fn learning_rate(&self) -> f64 {
+        self.learning_rate
+    }
+
+    /// Sets the learning rate (resuming a run restores the rate it had reached).
+    pub fn set_learning_rate(&mut self, learning_rate: f64) {
+        self.learning_rate = learning_rate;
+        self.optimizer
+            .set_learning_rate(learning_rate, &self.device);
     }
 
     fn rollout_model(&mut self) -> &ActorCritic {
@@ -308,10 +316,12 @@ impl Ppo {
             }
         }
         let steps = (cfg.num_learning_epochs * cfg.num_mini_batches) as f32;
-        // One read for the whole update: a NaN in any minibatch's losses makes its sum NaN.
-        let totals = values(totals.expect("an update has at least one minibatch"));
-        let [value, surrogate, entropy] = totals[..] else {
-            unreachable!("three losses per minibatch")
+        // One read for the whole update, the learning rate with the losses: a NaN in any
+        // minibatch's losses makes its sum NaN.
+        let totals = totals.expect("an update has at least one minibatch");
+        let read = values(Tensor::cat(vec![totals, self.optimizer.learning_rate()], 0));
+        let [value, surrogate, entropy, learning_rate] = read[..] else {
+            unreachable!("three losses per minibatch and the learning rate")
         };
         if !(value.is_finite() && surrogate.is_finite()) {
             let e = RlError::NonFinite(format!(
@@ -325,6 +335,7 @@ impl Ppo {
             (self.model, self.optimizer, self.learning_rate) = before;
             return Err(e);
         }
+        self.learning_rate = f64::from(learning_rate);
         // Only now: an update that failed can be run again on the same rollout, with the same
         // permutation.
         self.updates += 1;
@@ -407,9 +418,9 @@ impl Ppo {
     }
 
     /// One gradient step on a minibatch. Returns its value, surrogate and entropy losses as a
-    /// `[3]` tensor, left on the device (the update checks their sum). With the fixed schedule
-    /// the step never waits for the device: the gradient clipping is computed there too. The
-    /// adaptive schedule needs the KL before the step, so it reads it once per minibatch.
+    /// `[3]` tensor, left on the device (the update checks their sum). The step never waits
+    /// for the device: the adaptive learning rate, the gradient clipping and Adam all run
+    /// there.
     fn step_minibatch(&mut self, mb: Minibatch) -> Tensor<1> {
         let l = self.minibatch_losses(mb);
         let cfg = &self.cfg;
@@ -421,23 +432,17 @@ impl Ppo {
             0,
         );
         if cfg.schedule == Schedule::Adaptive {
-            // A NaN KL changes nothing here; the update then fails on its losses.
-            let kl = l.kl.into_scalar::<f32>();
-            let desired = cfg.desired_kl;
-            if kl > 2.0 * desired {
-                self.learning_rate = (self.learning_rate / 1.5).max(1e-5);
-            } else if kl > 0.0 && kl < desired / 2.0 {
-                self.learning_rate = (self.learning_rate * 1.5).min(1e-2);
-            }
+            // A NaN KL leaves the rate as it is; the update then fails on its losses.
+            self.optimizer.adapt(l.kl, cfg.desired_kl);
         }
         clip_gradients(&self.model, &mut grads, cfg.grad_clip, cfg.max_grad_norm);
         let model = self.model.clone();
-        self.model = self.optimizer.step(self.learning_rate, model, grads);
+        self.model = self.optimizer.step(model, grads);
         losses
     }
 
     /// Saves the network and the optimiser state as burnpack files `<base>.bpk` and
-    /// `<base>.optim.bpk`.
+    /// `<base>.adam.bpk`.
     pub fn save(&self, base: &Path) -> Result<(), RlError> {
         let model_path = base.with_extension("bpk");
         self.model
@@ -447,26 +452,35 @@ impl Ppo {
                 path: model_path,
                 message: e.to_string(),
             })?;
-        let optim_path = base.with_extension("optim.bpk");
         self.optimizer
-            .save(&optim_path)
-            .map_err(|e| RlError::Checkpoint {
-                path: optim_path,
-                message: e.to_string(),
-            })
+            .save(&self.model, &base.with_extension("adam.bpk"))
     }
 
     /// Loads the network (and, if `with_optimizer`, the optimiser state) saved by [`Ppo::save`].
+    /// A checkpoint whose optimiser state is in burn's format (`<base>.optim.bpk`, written
+    /// before Adam kept its learning rate on the device) resumes with fresh Adam moments and a
+    /// warning. A load that fails changes nothing.
     pub fn load(&mut self, base: &Path, with_optimizer: bool) -> Result<(), RlError> {
-        self.model = load_model(self.model.clone(), base)?;
-        self.rollout_model = None;
+        let model = load_model(self.model.clone(), base)?;
         if with_optimizer {
-            let path = base.with_extension("optim.bpk");
-            self.optimizer = adam().load(&path).map_err(|e| RlError::Checkpoint {
-                path,
-                message: e.to_string(),
-            })?;
+            let path = base.with_extension("adam.bpk");
+            let legacy = base.with_extension("optim.bpk");
+            let mut optimizer = self.optimizer.clone();
+            if !path.exists() && legacy.exists() {
+                tracing::warn!(
+                    "{} holds burn's Adam state, which this version does not read: resuming \
+                     with fresh Adam moments (the weights, normalisers and learning rate are \
+                     restored)",
+                    legacy.display()
+                );
+                optimizer = Adam::new(self.learning_rate, &self.device);
+            } else {
+                optimizer.load(&model, &path)?;
+            }
+            self.optimizer = optimizer;
         }
+        self.model = model;
+        self.rollout_model = None;
         Ok(())
     }
 }
@@ -933,10 +947,55 @@ mod tests {
         assert!((n.1.sqrt() - 1e-3).abs() < 1e-6, "norm {}", n.1.sqrt());
     }
 
+    /// A checkpoint restores Adam's state; one whose Adam file is missing is refused without
+    /// touching the network, and one with only burn's older optimiser file resumes with fresh
+    /// moments.
+    #[test]
+    fn checkpoints_restore_adam_or_refuse_cleanly() {
+        let mut p = ppo(16, 4);
+        rollout(&mut p);
+        p.update().unwrap();
+        let dir = std::env::temp_dir().join(format!("orbit-ppo-ckpt-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let base = dir.join("model_0");
+        p.save(&base).unwrap();
+        let steps = p.optimizer.steps();
+        assert_eq!(steps, 4, "2 epochs × 2 minibatches");
+
+        let mut q = ppo(16, 4);
+        q.load(&base, true).unwrap();
+        assert_eq!(q.optimizer.steps(), steps);
+        assert_eq!(values(q.model.action_std()), values(p.model.action_std()));
+
+        let adam = base.with_extension("adam.bpk");
+        std::fs::rename(&adam, base.with_extension("elsewhere")).unwrap();
+        let mut r = ppo(16, 4);
+        let fresh = values(r.model.action_std());
+        assert_ne!(fresh, values(p.model.action_std()), "the update moved σ");
+        assert!(matches!(
+            r.load(&base, true),
+            Err(RlError::Checkpoint { .. })
+        ));
+        assert_eq!(
+            values(r.model.action_std()),
+            fresh,
+            "the network is untouched"
+        );
+
+        std::fs::rename(
+            base.with_extension("elsewhere"),
+            base.with_extension("optim.bpk"),
+        )
+        .unwrap();
+        r.load(&base, true).unwrap();
+        assert_eq!(r.optimizer.steps(), 0);
+        assert_eq!(values(r.model.action_std()), values(p.model.action_std()));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// An update whose losses turn non-finite (NaN returns) fails without touching the
-    /// network, the learning rate or the shuffle, under either schedule (the adaptive one reads
-    /// a KL per minibatch, the fixed one nothing until the update's losses); the rollout stays
-    /// for another attempt.
+    /// network, the learning rate (on the host and on the device), Adam's step count or the
+    /// shuffle, under either schedule; the rollout stays for another attempt.
     #[test]
     fn a_failed_update_leaves_the_policy_as_it_was() {
         for schedule in [Schedule::Adaptive, Schedule::Fixed] {
@@ -953,13 +1012,13 @@ mod tests {
                     values(m.action_std()),
                 )
             };
-            let before = (outputs(&p), p.learning_rate, p.updates);
+            let state = |p: &Ppo| {
+                let rate = values(p.optimizer.learning_rate());
+                (p.learning_rate(), rate, p.optimizer.steps(), p.updates)
+            };
+            let before = (outputs(&p), state(&p));
             assert!(matches!(p.update(), Err(RlError::NonFinite(_))));
-            assert_eq!(
-                (outputs(&p), p.learning_rate, p.updates),
-                before,
-                "{schedule:?}"
-            );
+            assert_eq!((outputs(&p), state(&p)), before, "{schedule:?}");
             assert_eq!(p.storage.step, 4, "the rollout is kept");
         }
     }

@@ -1,5 +1,5 @@
 //! Run directories and checkpoint lookup, as Isaac Lab lays them out (spec §9.3):
-//! `logs/<experiment>/<YYYY-MM-DD_HH-MM-SS>[_<run_name>]/model_<it>.{bpk,optim.bpk,json}`.
+//! `logs/<experiment>/<YYYY-MM-DD_HH-MM-SS>[_<run_name>]/model_<it>.{bpk,adam.bpk,json}`.
 
 use std::path::{Path, PathBuf};
 

@@ -332,7 +332,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 mean_episode_length: mean(&self.lengths),
                 success_rate: (success.1 > 0).then(|| (success.0 / success.1 as f64) as f32),
                 losses,
-                learning_rate: self.alg.learning_rate,
+                learning_rate: self.alg.learning_rate(),
                 mean_noise_std: noise.iter().sum::<f32>() / noise.len() as f32,
                 fps: interactions as f64 / (collection_time + learning_time),
                 collection_time,
@@ -376,7 +376,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         }
     }
 
-    /// Writes `model_<it>.{bpk,optim.bpk,json}` into the run directory (`it` = the last
+    /// Writes `model_<it>.{bpk,adam.bpk,json}` into the run directory (`it` = the last
     /// finished iteration), if there is one.
     pub fn save_checkpoint(&self) -> Result<(), RlError> {
         let Some(dir) = &self.log_dir else {
@@ -386,7 +386,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         self.alg.save(&base)?;
         let state = CheckpointState {
             iteration: self.iteration,
-            learning_rate: self.alg.learning_rate,
+            learning_rate: self.alg.learning_rate(),
             env_steps: self.env_steps,
             wall_time: self.wall_time,
             num_obs: self.env.num_obs(),
@@ -422,7 +422,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             });
         }
         self.alg.load(base, true)?;
-        self.alg.learning_rate = state.learning_rate;
+        self.alg.set_learning_rate(state.learning_rate);
         self.obs_normalizer = state.obs_normalizer;
         self.critic_normalizer = state.critic_obs_normalizer;
         if self.alg.cfg.normalize_value {

@@ -72,7 +72,7 @@ fn checkpoints_restore_the_policy_and_the_run_directory_is_complete() {
     r.learn(4).unwrap();
     for f in [
         "model_1.bpk",
-        "model_1.optim.bpk",
+        "model_1.adam.bpk",
         "model_1.json",
         "model_3.bpk",
         "model_3.json",
@@ -96,7 +96,7 @@ fn checkpoints_restore_the_policy_and_the_run_directory_is_complete() {
     let mut resumed = runner(3, None, &value_norm);
     resumed.load_checkpoint(&dir.join("model_3")).unwrap();
     assert_eq!(resumed.iteration, 4);
-    assert_eq!(resumed.alg.learning_rate, r.alg.learning_rate);
+    assert_eq!(resumed.alg.learning_rate(), r.alg.learning_rate());
     let returns = r
         .alg
         .value_normalizer
