@@ -1,0 +1,36 @@
+# Concurrent step-based runs of the registered config (plus overrides XS) to MI iterations
+# (default 160, 1.57e7 interactions at 4 096 envs), one per seed in SEEDS, each resuming from
+# .dev/runs/<TAG>-s<seed> when an earlier call left one there (carry that folder). Writes
+# $OUT/runs-<TAG>.tgz with each run's scalars, configs and last checkpoint (pull.sh unpacks it).
+#   SEEDS="1 2 3" TAG=x XS="agent.algorithm.desired_kl=0.02" MI=160 TO=500 bash tools/device/seeds.sh
+source tools/device/common.sh
+MI=${MI:-160}; TO=${TO:-540}
+mkdir -p /tmp/runs
+for s in $SEEDS; do
+  r=$TAG-s$s; root=/tmp/runs/$r; res=""; left=$MI
+  if [ -d .dev/runs/$r ]; then
+    cp -r .dev/runs/$r /tmp/runs/
+    last=$(ls $root/box_pushing/*/model_*.json | sed 's/.*model_\([0-9]*\).json/\1/' | sort -n | tail -1)
+    res="--resume"; left=$((MI - last - 1))
+  fi
+  echo "seed $s: $left iterations $res"
+  timeout $TO /tmp/bin/train --backend wgpu --rl-device gpu --seed $s --log-root $root \
+    --max-iterations $left $res agent.save_interval=10 $XS > $root.log 2>&1 &
+  sleep 2
+done
+wait
+cd /tmp/runs
+for s in $SEEDS; do
+  r=$TAG-s$s
+  newest=$(ls -d $r/box_pushing/*/ | sort | tail -1)
+  last=$(ls $newest/model_*.json 2>/dev/null | sed 's/.*model_\([0-9]*\).json/\1/' | sort -n | tail -1)
+  # Keep every scalars.csv and params, and only the newest run's last checkpoint.
+  for d in $r/box_pushing/*/; do
+    for f in $d/model_*; do case $f in $newest/model_$last.*) ;; *) rm -f $f;; esac; done
+    rm -rf $d/videos
+  done
+  f=$newest/scalars.csv
+  echo "seed $s ($newest, last checkpoint $last): $(awk -F, '$4=="Train/success_rate"{s=$5;i=$1;e=$2} END{print "it " i " steps " e " success " s}' $f)"
+  awk -F, '$4=="Train/success_rate" && ($1%10==0){printf "%s:%.2f ", $1, $5} END{print ""}' $f
+done
+tar czf $OUT/runs-$TAG.tgz $(for s in $SEEDS; do echo $TAG-s$s $TAG-s$s.log; done)
