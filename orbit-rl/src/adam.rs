@@ -309,7 +309,8 @@ impl ModuleMapper for AdamStep<'_> {
         moments.first = m.into_bridge();
         moments.second = v.into_bridge();
         // The update leaves the autodiff graph and comes back as a fresh leaf, with the
-        // parameter's gradient settings.
+        // parameter's gradient settings (burn's optimiser also restores a distributed-training
+        // marker; the learner trains on one device).
         let require_grad = tensor.is_require_grad();
         let checkpointing = tensor.gradient_checkpointing_strategy();
         let mut updated = Tensor::from_inner(tensor.inner() - delta);

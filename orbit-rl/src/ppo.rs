@@ -326,10 +326,10 @@ impl Ppo {
         if !(value.is_finite() && surrogate.is_finite()) {
             let e = RlError::NonFinite(format!(
                 "the PPO loss (mean value loss {}, surrogate {} over the update; learning rate \
-                 {:.2e}; rollout {})",
+                 {:.2e} at its end; rollout {})",
                 value / steps,
                 surrogate / steps,
-                self.learning_rate,
+                learning_rate,
                 self.storage.extremes()
             ));
             (self.model, self.optimizer, self.learning_rate) = before;
