@@ -11,14 +11,15 @@
 //! optimisers keep theirs): reshaping them in every step added two operations per parameter
 //! to the host's stream and made small steps a third slower.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use burn::module::{Module, ModuleMapper, ModuleVisitor, Param};
 use burn::optim::GradientsParams;
 use burn::tensor::kind::BridgeTensor;
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Tensor};
 
 use crate::RlError;
+use crate::ppo::tensor1;
 
 /// The adaptive rule's bounds on the learning rate (RSL-RL's clamp).
 const MIN_LEARNING_RATE: f32 = 1e-5;
@@ -82,7 +83,7 @@ impl Adam {
             beta_1: 0.9,
             beta_2: 0.999,
             epsilon: 1e-8,
-            learning_rate: rate_tensor(learning_rate, device),
+            learning_rate: scalar_tensor(learning_rate, device),
             steps: 0,
             moments: Vec::new(),
         }
@@ -94,8 +95,8 @@ impl Adam {
     }
 
     /// Sets the learning rate.
-    pub fn set_learning_rate(&mut self, learning_rate: f64, device: &Device) {
-        self.learning_rate = rate_tensor(learning_rate, device);
+    pub fn set_learning_rate(&mut self, learning_rate: f64) {
+        self.learning_rate = scalar_tensor(learning_rate, &self.learning_rate.device());
     }
 
     /// Applies RSL-RL's adaptive rule to the learning rate (see [`adapt_learning_rate`]).
@@ -167,11 +168,11 @@ impl Adam {
         let record = AdamRecord {
             first: flat.first,
             second: flat.second,
-            steps: Param::from_tensor(rate_tensor(f64::from(self.steps), &device)),
+            steps: Param::from_tensor(scalar_tensor(f64::from(self.steps), &device)),
         };
         record
             .save_file(path)
-            .map_err(|e| checkpoint_error(path, e))
+            .map_err(|e| RlError::checkpoint(path, e))
     }
 
     /// Loads the moments and the step count saved by [`Adam::save`] for the parameters of
@@ -196,10 +197,10 @@ impl Adam {
         };
         let record = template
             .try_load_file(path)
-            .map_err(|e| checkpoint_error(path, e))?;
+            .map_err(|e| RlError::checkpoint(path, e))?;
         let steps = record.steps.val().into_scalar::<f32>();
         if !(steps >= 0.0 && steps.fract() == 0.0 && steps <= u32::MAX as f32) {
-            return Err(checkpoint_error(
+            return Err(RlError::checkpoint(
                 path,
                 format!("the step count {steps} is not a whole number"),
             ));
@@ -233,17 +234,9 @@ impl Adam {
     }
 }
 
-/// A `[1]` tensor holding `value`.
-fn rate_tensor(value: f64, device: &Device) -> Tensor<1> {
-    Tensor::from_data(TensorData::new(vec![value as f32], [1]), device).inner()
-}
-
-/// A checkpoint error for `path`.
-fn checkpoint_error(path: &Path, message: impl ToString) -> RlError {
-    RlError::Checkpoint {
-        path: PathBuf::from(path),
-        message: message.to_string(),
-    }
+/// A `[1]` tensor holding `value`, off the autodiff graph.
+fn scalar_tensor(value: f64, device: &Device) -> Tensor<1> {
+    tensor1(vec![value as f32], device).inner()
 }
 
 /// One Adam step as a module mapper: the parameters come in visit order, `index` counts them.
@@ -329,6 +322,7 @@ mod tests {
     use super::*;
     use burn::nn::{Linear, LinearConfig};
     use burn::optim::AdamConfig;
+    use burn::tensor::TensorData;
 
     fn device() -> Device {
         Device::flex().autodiff()

@@ -65,4 +65,12 @@ impl RlError {
         let path = path.into();
         move |source| RlError::Io { path, source }
     }
+
+    /// A [`RlError::Checkpoint`] for `path` saying `message` (e.g. a burn record error).
+    pub fn checkpoint(path: impl Into<PathBuf>, message: impl ToString) -> Self {
+        RlError::Checkpoint {
+            path: path.into(),
+            message: message.to_string(),
+        }
+    }
 }

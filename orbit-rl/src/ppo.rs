@@ -70,7 +70,7 @@ pub(crate) fn tensor2(values: Vec<f32>, rows: usize, cols: usize, device: &Devic
 }
 
 /// A `[n]` tensor.
-fn tensor1(values: Vec<f32>, device: &Device) -> Tensor<1> {
+pub(crate) fn tensor1(values: Vec<f32>, device: &Device) -> Tensor<1> {
     let n = values.len();
     Tensor::from_data(TensorData::new(values, [n]), device)
 }
@@ -140,8 +140,7 @@ impl Ppo {
     /// Sets the learning rate (resuming a run restores the rate it had reached).
     pub fn set_learning_rate(&mut self, learning_rate: f64) {
         self.learning_rate = learning_rate;
-        self.optimizer
-            .set_learning_rate(learning_rate, &self.device);
+        self.optimizer.set_learning_rate(learning_rate);
     }
 
     fn rollout_model(&mut self) -> &ActorCritic {
@@ -448,10 +447,7 @@ impl Ppo {
         self.model
             .clone()
             .save_file(&model_path)
-            .map_err(|e| RlError::Checkpoint {
-                path: model_path,
-                message: e.to_string(),
-            })?;
+            .map_err(|e| RlError::checkpoint(model_path, e))?;
         self.optimizer
             .save(&self.model, &base.with_extension("adam.bpk"))
     }
@@ -488,10 +484,9 @@ impl Ppo {
 /// Loads network weights saved by [`Ppo::save`] into `model` (which fixes the architecture).
 pub fn load_model(model: ActorCritic, base: &Path) -> Result<ActorCritic, RlError> {
     let path = base.with_extension("bpk");
-    model.try_load_file(&path).map_err(|e| RlError::Checkpoint {
-        path,
-        message: e.to_string(),
-    })
+    model
+        .try_load_file(&path)
+        .map_err(|e| RlError::checkpoint(path, e))
 }
 
 /// The squared norm of the gradients of `module`'s parameters, `Σ‖g‖²` (shape `[1]`).
