@@ -1,4 +1,6 @@
-//! Replays a trained policy (Isaac Lab's `rsl_rl/play.py`), printing each episode's return:
+//! Replays a trained policy with its mean actions (Isaac Lab's `rsl_rl/play.py`), printing each
+//! episode's return and, at the end, the mean return and episode metrics (e.g. the success rate)
+//! over all played episodes:
 //!
 //! ```text
 //! cargo run --release --example play -- --task Reach-Franka-v0            # newest run

@@ -1,6 +1,7 @@
 //! The `train` and `play` workflows (Isaac Lab's `rsl_rl/train.py` and `play.py`): resolve the
 //! task's env and agent configs with overrides, make the run directory, train or replay.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use clap::Parser;
@@ -266,8 +267,50 @@ pub fn train(
     Ok(runner)
 }
 
-/// Replays a trained policy (mean actions) and prints each finished episode's return and
-/// success metric.
+/// Means over the episodes `play` reports: returns, and the env's logged episode metrics.
+#[derive(Default, Debug)]
+struct EpisodeSummary {
+    /// Reported episodes.
+    episodes: usize,
+    /// Sum of their returns.
+    return_sum: f64,
+    /// Per metric: the sum of (step mean × resets of that step) and the resets.
+    metrics: BTreeMap<String, (f64, usize)>,
+}
+
+impl EpisodeSummary {
+    /// Counts one finished episode with its return.
+    fn add_return(&mut self, episode_return: f32) {
+        self.episodes += 1;
+        self.return_sum += f64::from(episode_return);
+    }
+
+    /// Folds in a step's log, whose values are means over the `resets` envs that finished in
+    /// that step, so each weighs as many episodes as it averages.
+    fn add_log(&mut self, log: &BTreeMap<String, f32>, resets: usize) {
+        for (key, &value) in log {
+            let m = self.metrics.entry(key.clone()).or_default();
+            m.0 += f64::from(value) * resets as f64;
+            m.1 += resets;
+        }
+    }
+
+    /// Mean return of the reported episodes (0 before any).
+    fn mean_return(&self) -> f64 {
+        self.return_sum / self.episodes.max(1) as f64
+    }
+
+    /// Each metric's mean over the episodes it was logged for.
+    fn metrics(&self) -> impl Iterator<Item = (&str, f64)> {
+        self.metrics
+            .iter()
+            .filter(|(_, (_, n))| *n > 0)
+            .map(|(k, &(sum, n))| (k.as_str(), sum / n as f64))
+    }
+}
+
+/// Replays a trained policy (mean actions), prints each finished episode's return and the
+/// step's episode metrics, then the mean return and metrics over all played episodes.
 pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     crate::link_registrations();
     let overrides = split_overrides(&args.overrides);
@@ -322,10 +365,11 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let n = env.num_envs();
     let mut returns = vec![0.0f32; n];
     let mut finished = vec![0usize; n];
+    let mut summary = EpisodeSummary::default();
     while finished.iter().any(|&f| f < args.episodes) || video_due() {
         let actions = policy.act(env.observations());
         let step = env.step(&actions)?;
-        let mut any = false;
+        let mut reported = false;
         for e in 0..n {
             returns[e] += step.rewards[e];
             if step.dones[e] {
@@ -334,17 +378,27 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
                         "env {e:>4}: episode {} return {:>9.3}",
                         finished[e], returns[e]
                     );
-                    any = true;
+                    summary.add_return(returns[e]);
+                    reported = true;
                 }
                 finished[e] += 1;
                 returns[e] = 0.0;
             }
         }
-        if any {
+        if reported {
             for (key, value) in step.log {
                 println!("    {key}: {value:.4}");
             }
+            summary.add_log(step.log, step.dones.iter().filter(|&&d| d).count());
         }
+    }
+    println!(
+        "{} episodes (mean actions): mean return {:.3}",
+        summary.episodes,
+        summary.mean_return()
+    );
+    for (key, value) in summary.metrics() {
+        println!("    {key}: {value:.4}");
     }
     // Dropping the env closes the video file.
     drop(env);
@@ -352,4 +406,30 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         println!("video: {}", orbit_render::video_path(&dir, 0).display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A metric logged as a mean over 3 resets (1.0) and then over 1 reset (0.0) is 0.75 over
+    /// the four episodes, not the 0.5 of the two step means; the mean return is exact.
+    #[test]
+    fn episode_summary_weighs_each_step_mean_by_its_resets() {
+        let mut summary = EpisodeSummary::default();
+        let log = |v: f32| BTreeMap::from([("Metrics/target/success".to_string(), v)]);
+        for r in [-1.0, -2.0, -3.0] {
+            summary.add_return(r);
+        }
+        summary.add_log(&log(1.0), 3);
+        summary.add_return(-6.0);
+        summary.add_log(&log(0.0), 1);
+        summary.add_log(&BTreeMap::new(), 2);
+        assert_eq!(summary.episodes, 4);
+        assert!((summary.mean_return() - (-3.0)).abs() < 1e-12);
+        let metrics: Vec<_> = summary.metrics().collect();
+        assert_eq!(metrics.len(), 1);
+        assert_eq!(metrics[0].0, "Metrics/target/success");
+        assert!((metrics[0].1 - 0.75).abs() < 1e-12);
+    }
 }
