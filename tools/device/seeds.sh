@@ -1,7 +1,8 @@
 # Concurrent step-based runs of the registered config (plus overrides XS) to MI iterations
 # (default 160, 1.57e7 interactions at 4 096 envs), one per seed in SEEDS, each resuming from
 # .dev/runs/<TAG>-s<seed> when an earlier call left one there (carry that folder). Writes
-# $OUT/runs-<TAG>.tgz with each run's scalars, configs and last checkpoint (pull.sh unpacks it).
+# $OUT/runs-<TAG>-s<seed>.tgz per seed (the device tool returns files of up to 16 MiB, at most 8)
+# with the run's scalars, configs and last checkpoint (pull.sh unpacks them).
 #   SEEDS="1 2 3" TAG=x XS="agent.algorithm.desired_kl=0.02" MI=160 TO=500 bash tools/device/seeds.sh
 source tools/device/common.sh
 MI=${MI:-160}; TO=${TO:-540}
@@ -33,4 +34,4 @@ for s in $SEEDS; do
   echo "seed $s ($newest, last checkpoint $last): $(awk -F, '$4=="Train/success_rate"{s=$5;i=$1;e=$2} END{print "it " i " steps " e " success " s}' $f)"
   awk -F, '$4=="Train/success_rate" && ($1%10==0){printf "%s:%.2f ", $1, $5} END{print ""}' $f
 done
-tar czf $OUT/runs-$TAG.tgz $(for s in $SEEDS; do echo $TAG-s$s $TAG-s$s.log; done)
+for s in $SEEDS; do tar czf $OUT/runs-$TAG-s$s.tgz $TAG-s$s $TAG-s$s.log; done
