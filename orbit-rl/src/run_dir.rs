@@ -29,10 +29,8 @@ pub fn resolve_checkpoint(
     checkpoint: &str,
 ) -> Result<PathBuf, RlError> {
     let pattern = |p: &str| {
-        Regex::new(&format!("^(?:{p})")).map_err(|e| RlError::Checkpoint {
-            path: experiment_dir.to_path_buf(),
-            message: format!("invalid pattern `{p}`: {e}"),
-        })
+        Regex::new(&format!("^(?:{p})"))
+            .map_err(|e| RlError::checkpoint(experiment_dir, format!("invalid pattern `{p}`: {e}")))
     };
     let (run_re, ckpt_re) = (pattern(load_run)?, pattern(checkpoint)?);
     let list = |dir: &Path| -> Result<Vec<String>, RlError> {
@@ -46,9 +44,11 @@ pub fn resolve_checkpoint(
     let run = list(experiment_dir)?
         .into_iter()
         .rfind(|n| run_re.is_match(n) && experiment_dir.join(n).is_dir())
-        .ok_or_else(|| RlError::Checkpoint {
-            path: experiment_dir.to_path_buf(),
-            message: format!("no run directory matches `{load_run}`"),
+        .ok_or_else(|| {
+            RlError::checkpoint(
+                experiment_dir,
+                format!("no run directory matches `{load_run}`"),
+            )
         })?;
     let run_dir = experiment_dir.join(run);
     let mut checkpoints: Vec<String> = list(&run_dir)?
@@ -58,9 +58,8 @@ pub fn resolve_checkpoint(
         .collect();
     // Left-pad to 15 characters so `model_50` sorts before `model_100`.
     checkpoints.sort_by_key(|n| format!("{n:0>15}"));
-    let last = checkpoints.pop().ok_or_else(|| RlError::Checkpoint {
-        path: run_dir.clone(),
-        message: format!("no checkpoint matches `{checkpoint}`"),
+    let last = checkpoints.pop().ok_or_else(|| {
+        RlError::checkpoint(&run_dir, format!("no checkpoint matches `{checkpoint}`"))
     })?;
     Ok(run_dir.join(last))
 }

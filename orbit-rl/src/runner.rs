@@ -413,13 +413,13 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             self.env.num_actions(),
         );
         if (state.num_obs, state.num_critic_obs, state.num_actions) != dims {
-            return Err(RlError::Checkpoint {
-                path: base.with_extension("json"),
-                message: format!(
+            return Err(RlError::checkpoint(
+                base.with_extension("json"),
+                format!(
                     "trained for (obs, critic obs, actions) = {:?}, this env has {dims:?}",
                     (state.num_obs, state.num_critic_obs, state.num_actions)
                 ),
-            });
+            ));
         }
         self.alg.load(base, true)?;
         self.alg.set_learning_rate(state.learning_rate);
@@ -467,10 +467,7 @@ fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
 pub fn read_state(base: &Path) -> Result<CheckpointState, RlError> {
     let path = base.with_extension("json");
     let text = std::fs::read_to_string(&path).map_err(RlError::io(&path))?;
-    serde_json::from_str(&text).map_err(|e| RlError::Checkpoint {
-        path,
-        message: e.to_string(),
-    })
+    serde_json::from_str(&text).map_err(|e| RlError::checkpoint(path, e))
 }
 
 /// A trained policy for inference: observation normaliser + actor, mean actions.
