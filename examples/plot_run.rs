@@ -21,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let segments = args
         .run_dirs
         .iter()
-        .map(|d| orbit::rl::logger::read_scalars(&d.join("scalars.csv")))
+        .map(|d| orbit::rl::logger::read_scalars(&d.join(orbit::rl::logger::SCALARS_FILE)))
         .collect::<Result<Vec<_>, _>>()?;
     let history = orbit::rl::logger::merge_segments(segments);
     let has_success = history.iter().any(|h| h.success_rate.is_some());

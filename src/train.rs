@@ -251,18 +251,19 @@ pub fn train(
     let iterations = cfg.max_iterations;
     let device = crate::learner::learner_device(cfg.device)?;
     let mut runner = OnPolicyRunner::new(vec_env, cfg, Some(dir), device)?;
-    if let Some(base) = resume_from {
+    if let Some(base) = &resume_from {
         println!("resuming from {}", base.display());
-        runner.load_checkpoint(&base)?;
+        runner.load_checkpoint(base)?;
     }
     runner.show_progress = show_progress;
     runner.learn(iterations)?;
     if let Some(dir) = runner.log_dir() {
-        orbit_rl::plot::write_training_curves(
-            dir,
-            &runner.history,
-            runner.cfg.success_metric.is_some(),
-        )?;
+        // A resumed run's curves continue those of the run it resumed from.
+        let history = match &resume_from {
+            Some(base) => orbit_rl::logger::resumed_history(base, &runner.history),
+            None => runner.history.clone(),
+        };
+        orbit_rl::plot::write_training_curves(dir, &history, runner.cfg.success_metric.is_some())?;
     }
     Ok(runner)
 }

@@ -9,6 +9,9 @@ use crate::RlError;
 use crate::runner::IterationLog;
 use crate::tensorboard::EventWriter;
 
+/// The file name of a run's scalar log.
+pub const SCALARS_FILE: &str = "scalars.csv";
+
 /// `scalars.csv` (`iteration,env_steps,wall_time,tag,value`) and `events.out.tfevents.*`
 /// (step = iteration), both flushed after every iteration.
 pub struct ScalarLog {
@@ -20,7 +23,7 @@ pub struct ScalarLog {
 impl ScalarLog {
     /// Creates (or truncates) `dir/scalars.csv`, writes its header, and starts an event file.
     pub fn create(dir: &Path) -> Result<Self, RlError> {
-        let path = dir.join("scalars.csv");
+        let path = dir.join(SCALARS_FILE);
         let file = File::create(&path).map_err(RlError::io(&path))?;
         let mut log = Self {
             path,
@@ -61,6 +64,21 @@ pub fn merge_segments(segments: Vec<Vec<IterationLog>>) -> Vec<IterationLog> {
         by_iteration.insert(log.iteration, log);
     }
     by_iteration.into_values().collect()
+}
+
+/// The history to plot for a run resumed from the checkpoint `checkpoint_base`
+/// (`<run>/model_<it>`): the resumed-from run's `scalars.csv` merged with this run's `own`
+/// iterations (see [`merge_segments`]). Without a readable earlier file it is `own` alone,
+/// with a warning.
+pub fn resumed_history(checkpoint_base: &Path, own: &[IterationLog]) -> Vec<IterationLog> {
+    let earlier = checkpoint_base.with_file_name(SCALARS_FILE);
+    let mut segments = Vec::with_capacity(2);
+    match read_scalars(&earlier) {
+        Ok(logs) => segments.push(logs),
+        Err(e) => tracing::warn!("plotting the resumed run's own iterations only: {e}"),
+    }
+    segments.push(own.to_vec());
+    merge_segments(segments)
 }
 
 /// Reads a `scalars.csv` back into one [`IterationLog`] per iteration (for re-plotting a run

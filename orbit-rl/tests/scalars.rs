@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use orbit_rl::IterationLog;
-use orbit_rl::logger::{ScalarLog, merge_segments, read_scalars};
+use orbit_rl::logger::{ScalarLog, merge_segments, read_scalars, resumed_history};
 use orbit_rl::ppo::LossStats;
 
 fn log(iteration: usize, success: Option<f32>) -> IterationLog {
@@ -77,4 +77,25 @@ fn resumed_segments_merge_with_redone_iterations_replaced() {
     assert_eq!(iterations, [0, 1, 2, 3, 4, 5]);
     let returns: Vec<f32> = merged.iter().map(|l| l.mean_return.unwrap()).collect();
     assert_eq!(returns, [-251.37, -250.37, -249.37, 7.0, 7.0, 7.0]);
+}
+
+#[test]
+fn a_resumed_run_plots_the_earlier_run_before_its_own_iterations() {
+    let dir = std::env::temp_dir().join(format!("orbit-resumed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    {
+        let mut out = ScalarLog::create(&dir).unwrap();
+        for i in 0..5 {
+            out.write(&log(i, None)).unwrap();
+        }
+    }
+    // Resumed from the checkpoint of iteration 2: iterations 3-5 are this run's.
+    let own: Vec<IterationLog> = (3..6).map(|i| log(i, Some(0.5))).collect();
+    let history = resumed_history(&dir.join("model_2"), &own);
+    let iterations: Vec<usize> = history.iter().map(|l| l.iteration).collect();
+    assert_eq!(iterations, [0, 1, 2, 3, 4, 5]);
+    assert_eq!(history[3..], own[..]);
+    // Without the earlier run's scalars, only this run's iterations.
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(resumed_history(&dir.join("model_2"), &own), own);
 }
