@@ -6,8 +6,7 @@
 source tools/device/common.sh
 NE=${NE:-4096}; ES=${ES:-1000}
 for r in $RUNS; do
-  newest=$(ls -d .dev/runs/$r/box_pushing/*/ | sort | tail -1)
-  last=$(ls $newest/model_*.json | sed 's/.*model_\([0-9]*\).json/\1/' | sort -n | tail -1)
+  newest=$(newest_run .dev/runs/$r); last=$(last_checkpoint $newest)
   train=$(awk -F, '$4=="Train/success_rate"{s=$5} END{printf "%.3f", s}' $newest/scalars.csv)
   greedy=$(/tmp/bin/play --checkpoint $newest/model_$last --backend wgpu --num-envs $NE \
     --seed $ES 2>&1 | awk '/episodes \(mean actions\)/{p=1} p && /Metrics\/target\/success/{printf "%.4f", $2}')

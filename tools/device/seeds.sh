@@ -11,7 +11,7 @@ for s in $SEEDS; do
   r=$TAG-s$s; root=/tmp/runs/$r; res=""; left=$MI
   if [ -d .dev/runs/$r ]; then
     cp -r .dev/runs/$r /tmp/runs/
-    last=$(ls $root/box_pushing/*/model_*.json | sed 's/.*model_\([0-9]*\).json/\1/' | sort -n | tail -1)
+    last=$(last_checkpoint $root/box_pushing/*/)
     res="--resume"; left=$((MI - last - 1))
   fi
   echo "seed $s: $left iterations $res"
@@ -23,8 +23,7 @@ wait
 cd /tmp/runs
 for s in $SEEDS; do
   r=$TAG-s$s
-  newest=$(ls -d $r/box_pushing/*/ | sort | tail -1)
-  last=$(ls $newest/model_*.json 2>/dev/null | sed 's/.*model_\([0-9]*\).json/\1/' | sort -n | tail -1)
+  newest=$(newest_run $r); last=$(last_checkpoint $newest)
   # Keep every scalars.csv and params, and only the newest run's last checkpoint.
   for d in $r/box_pushing/*/; do
     for f in $d/model_*; do case $f in $newest/model_$last.*) ;; *) rm -f $f;; esac; done
