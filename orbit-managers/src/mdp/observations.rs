@@ -1,4 +1,5 @@
-//! Observation terms: joint state, actions, commands, object poses.
+//! Observation terms: joint state, actions, commands, object poses and velocities, frame
+//! positions.
 use super::*;
 
 /// `joint_pos_rel` / `joint_vel_rel`: selected joint positions or velocities minus defaults.
@@ -98,39 +99,113 @@ impl ObservationTerm for GeneratedCommands {
         out.copy_from_slice(cmd);
     }
 }
-/// `root_pos` / `root_quat`: a rigid object's position (env frame) or orientation `(w,x,y,z)`.
-struct RootPose {
-    object: usize,
-    quat: bool,
+/// Which root-state quantity of a rigid object a [`RootState`] term reads.
+#[derive(Clone, Copy)]
+enum RootQuantity {
+    /// Position in the env frame (3).
+    Pos,
+    /// Orientation `(w, x, y, z)` (4).
+    Quat,
+    /// Linear velocity of the body origin, world (= env) axes (3).
+    LinVel,
+    /// Angular velocity, world (= env) axes (3).
+    AngVel,
 }
 
-impl ObservationTerm for RootPose {
+/// `root_pos` / `root_quat` / `root_lin_vel` / `root_ang_vel`: one root-state quantity of a
+/// rigid object.
+struct RootState {
+    object: usize,
+    quantity: RootQuantity,
+}
+
+impl ObservationTerm for RootState {
     fn dim(&self) -> usize {
-        if self.quat { 4 } else { 3 }
+        match self.quantity {
+            RootQuantity::Quat => 4,
+            _ => 3,
+        }
     }
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
         let view = env.scene.backend.rigid_object(self.object);
         let d = self.dim();
         for (e, row) in out.chunks_exact_mut(d).enumerate() {
-            if self.quat {
-                row.copy_from_slice(&orbit_core::math::to_wxyz(view.quat[e]));
-            } else {
-                row.copy_from_slice(&view.pos[e].to_array());
+            match self.quantity {
+                RootQuantity::Pos => row.copy_from_slice(&view.pos[e].to_array()),
+                RootQuantity::Quat => {
+                    row.copy_from_slice(&orbit_core::math::to_wxyz(view.quat[e]));
+                }
+                RootQuantity::LinVel => row.copy_from_slice(&view.lin_vel[e].to_array()),
+                RootQuantity::AngVel => row.copy_from_slice(&view.ang_vel[e].to_array()),
             }
         }
     }
 }
 
-fn root_pose(ctx: &TermContext<'_>, quat: bool) -> Result<Box<dyn ObservationTerm>, EnvError> {
+fn root_state(
+    ctx: &TermContext<'_>,
+    quantity: RootQuantity,
+) -> Result<Box<dyn ObservationTerm>, EnvError> {
     let p: ObjectParams = ctx.params()?;
     let object = ctx
         .scene
         .rigid_object(&format!("{}.params.asset", ctx.field), &p.asset)?;
-    Ok(Box::new(RootPose { object, quat }))
+    Ok(Box::new(RootState { object, quantity }))
 }
 
-inventory::submit! { ObservationTermDef { name: "root_pos", build: |c| root_pose(c, false) } }
-inventory::submit! { ObservationTermDef { name: "root_quat", build: |c| root_pose(c, true) } }
+inventory::submit! { ObservationTermDef { name: "root_pos", build: |c| root_state(c, RootQuantity::Pos) } }
+inventory::submit! { ObservationTermDef { name: "root_quat", build: |c| root_state(c, RootQuantity::Quat) } }
+inventory::submit! { ObservationTermDef { name: "root_lin_vel", build: |c| root_state(c, RootQuantity::LinVel) } }
+inventory::submit! { ObservationTermDef { name: "root_ang_vel", build: |c| root_state(c, RootQuantity::AngVel) } }
+
+/// Parameters of `frame_pos`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub asset: String,
+    /// A link of the articulation, or a frame rigidly attached to one (e.g. a tool tip).
+    pub frame: String,
+}
+
+impl Default for FrameParams {
+    /// No frame: the term's error then lists the articulation's links.
+    fn default() -> Self {
+        Self {
+            asset: robot(),
+            frame: String::new(),
+        }
+    }
+}
+
+/// `frame_pos`: the position of an articulation's link or frame in the env frame (3), Isaac
+/// Lab's end-effector position observation.
+struct FramePos {
+    articulation: usize,
+    link: usize,
+    offset: orbit_core::math::Pose,
+}
+
+impl ObservationTerm for FramePos {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let view = env.scene.backend.articulation(self.articulation);
+        for (e, row) in out.chunks_exact_mut(3).enumerate() {
+            let pos = view.frame_pose(e, self.link, &self.offset).pos;
+            row.copy_from_slice(&pos.to_array());
+        }
+    }
+}
+
+inventory::submit! { ObservationTermDef { name: "frame_pos", build: |c| {
+    let p: FrameParams = c.params()?;
+    let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
+    let (link, offset) = c.scene.frame(&format!("{}.params.frame", c.field), articulation, &p.frame)?;
+    Ok(Box::new(FramePos { articulation, link, offset }))
+} } }
 
 inventory::submit! { ObservationTermDef { name: "last_action", build: |c| Ok(Box::new(LastAction(c.action_dim))) } }
 

@@ -469,6 +469,54 @@ fn friction_randomisation_changes_sliding() {
     );
 }
 
+/// A `critic` group of privileged terms: `frame_pos` puts the tcp where the reset's IK placed
+/// it (15 cm above the box's default position, within the IK's 3.2 mm), and `root_lin_vel` /
+/// `root_ang_vel` read a box launched at 0.5 m/s along +y: after 0.1 s of sliding on plate
+/// friction 0.3 it moves at 0.5 − μ g t = 0.206 m/s without turning. A frame the robot lacks
+/// is an error naming the field.
+#[test]
+fn privileged_critic_terms_read_frames_and_box_velocity() {
+    let launch = "events.launch=(func: \"reset_root_state_uniform\", params: (asset: \"box\", pos_range: ((0.15, 0.15), (0.0, 0.0), (0.0, 0.0)), lin_vel_range: ((0.0, 0.0), (0.5, 0.5), (0.0, 0.0))), mode: Reset)";
+    let critic = "observations.critic=(terms: {\"tcp\": (func: \"frame_pos\", params: (frame: \"tcp\")), \"box_lin_vel\": (func: \"root_lin_vel\", params: (asset: \"box\")), \"box_ang_vel\": (func: \"root_ang_vel\", params: (asset: \"box\"))})";
+    let mut plain = env(1, &[critic]);
+    plain.reset().unwrap();
+    let (obs, d) = plain.observation("critic").unwrap();
+    assert_eq!(d, 9);
+    let tcp = glam::Vec3::from_slice(&obs[..3]);
+    let above_box = glam::Vec3::new(0.4, 0.3, -0.01 + 0.15);
+    assert!((tcp - above_box).length() < 3.2e-3, "tcp at {tcp}");
+
+    let mut env = env(1, &[launch, critic]);
+    env.reset().unwrap();
+    let zero = vec![0.0; env.action_dim()];
+    for _ in 0..5 {
+        env.step(&zero).unwrap();
+    }
+    let (obs, _) = env.observation("critic").unwrap();
+    let (lin, ang) = (&obs[3..6], &obs[6..9]);
+    let expected = 0.5 - 0.3 * 9.81 * 0.1;
+    println!("box velocity after 0.1 s: {lin:?} (ideal {expected:.4} along y), spin {ang:?}");
+    assert!(
+        (lin[1] - expected).abs() < 0.02,
+        "v_y {} vs {expected}",
+        lin[1]
+    );
+    assert!(lin[0].abs() < 0.01 && lin[2].abs() < 0.01, "{lin:?}");
+    assert!(ang.iter().all(|w| w.abs() < 0.05), "the box turns: {ang:?}");
+    let bad_frame = make(
+        TASK,
+        &["observations.critic=(terms: {\"tip\": (func: \"frame_pos\", params: (frame: \"rod_tipp\"))})".into()],
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(
+        bad_frame.contains("observations.critic.terms.tip.params.frame")
+            && bad_frame.contains("rod_tipp"),
+        "{bad_frame}"
+    );
+}
+
 /// Fancy Gym's offline IK for the default box pose reproduces its q₀ (spec §2.8): the same 86
 /// accepted iterations and q₀ to within 1e-5 rad (measured 2.4e-7, f32 resolution), the tcp
 /// within √1e-5 = 3.2 mm of its target with the rod pointing down.
