@@ -14,6 +14,17 @@ fn env(num_envs: usize, extra: &[&str]) -> ManagerBasedRlEnv {
     make(TASK, &overrides).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The error `make` gives for the box-pushing task with one override, as text.
+fn config_error(override_: &str) -> String {
+    make(TASK, &[override_.into()])
+        .err()
+        .expect("the override is rejected")
+        .to_string()
+}
+
+/// Reset event: the box 15 cm further along +x, launched at 0.5 m/s along +y.
+const LAUNCH_BOX: &str = "events.launch=(func: \"reset_root_state_uniform\", params: (asset: \"box\", pos_range: ((0.15, 0.15), (0.0, 0.0), (0.0, 0.0)), lin_vel_range: ((0.0, 0.0), (0.5, 0.5), (0.0, 0.0))), mode: Reset)";
+
 /// Zero action for a whole episode from the default reset and the seed-0 target: Fancy Gym's
 /// Dense return is −194.5184 (MuJoCo); we must agree within 1 %. The episode times out at
 /// exactly step 100 and the observation returned then belongs to the new episode.
@@ -90,54 +101,27 @@ fn non_finite_actions_are_rejected() {
 /// Config mistakes name the file and the field.
 #[test]
 fn config_errors_name_file_and_field() {
-    let unknown = make(
-        TASK,
-        &["rewards.goal_distance.func=\"box_goal_distanse\"".into()],
-    )
-    .err()
-    .unwrap()
-    .to_string();
+    let unknown = config_error("rewards.goal_distance.func=\"box_goal_distanse\"");
     assert!(unknown.contains("rewards.goal_distance.func"), "{unknown}");
     assert!(unknown.contains("box_goal_distanse"), "{unknown}");
-    let wrong_type = make(TASK, &["rewards.goal_distance.weight=\"heavy\"".into()])
-        .err()
-        .unwrap()
-        .to_string();
+    let wrong_type = config_error("rewards.goal_distance.weight=\"heavy\"");
     assert!(
         wrong_type.contains("rewards.goal_distance.weight"),
         "{wrong_type}"
     );
-    let bad_regex = make(
-        TASK,
-        &["actions.arm.params.joint_names=[\"finger.*\"]".into()],
-    )
-    .err()
-    .unwrap()
-    .to_string();
+    let bad_regex = config_error("actions.arm.params.joint_names=[\"finger.*\"]");
     assert!(
         bad_regex.contains("actions.arm.params.joint_names"),
         "{bad_regex}"
     );
     assert!(bad_regex.contains("matches no joint"), "{bad_regex}");
-    let bad_param = make(
-        TASK,
-        &["rewards.rod_tip_box.params=(robbot: \"robot\")".into()],
-    )
-    .err()
-    .unwrap()
-    .to_string();
+    let bad_param = config_error("rewards.rod_tip_box.params=(robbot: \"robot\")");
     assert!(
         bad_param.contains("rewards.rod_tip_box.params"),
         "{bad_param}"
     );
     assert!(bad_param.contains("robbot"), "{bad_param}");
-    let bad_command = make(
-        TASK,
-        &["rewards.goal_distance.params=(command: \"goal\")".into()],
-    )
-    .err()
-    .unwrap()
-    .to_string();
+    let bad_command = config_error("rewards.goal_distance.params=(command: \"goal\")");
     assert!(
         bad_command.contains("rewards.goal_distance"),
         "{bad_command}"
@@ -438,10 +422,9 @@ fn curriculum_changes_a_reward_weight() {
 /// stops after v²/(2 μ g) = 42.5 mm, with friction drawn from (0, 0) it keeps sliding at 0.5 m/s.
 #[test]
 fn friction_randomisation_changes_sliding() {
-    let launch = "events.launch=(func: \"reset_root_state_uniform\", params: (asset: \"box\", pos_range: ((0.15, 0.15), (0.0, 0.0), (0.0, 0.0)), lin_vel_range: ((0.0, 0.0), (0.5, 0.5), (0.0, 0.0))), mode: Reset)";
     let slippery = "events.ice=(func: \"randomize_rigid_body_material\", params: (asset: \"box\", friction_range: (0.0, 0.0)), mode: Startup)";
     let slide = |extra: &[&str]| {
-        let mut args = vec![launch];
+        let mut args = vec![LAUNCH_BOX];
         args.extend_from_slice(extra);
         let mut env = env(1, &args);
         env.reset().unwrap();
@@ -476,7 +459,6 @@ fn friction_randomisation_changes_sliding() {
 /// is an error naming the field.
 #[test]
 fn privileged_critic_terms_read_frames_and_box_velocity() {
-    let launch = "events.launch=(func: \"reset_root_state_uniform\", params: (asset: \"box\", pos_range: ((0.15, 0.15), (0.0, 0.0), (0.0, 0.0)), lin_vel_range: ((0.0, 0.0), (0.5, 0.5), (0.0, 0.0))), mode: Reset)";
     let critic = "observations.critic=(terms: {\"tcp\": (func: \"frame_pos\", params: (frame: \"tcp\")), \"box_lin_vel\": (func: \"root_lin_vel\", params: (asset: \"box\")), \"box_ang_vel\": (func: \"root_ang_vel\", params: (asset: \"box\"))})";
     let mut plain = env(1, &[critic]);
     plain.reset().unwrap();
@@ -486,7 +468,7 @@ fn privileged_critic_terms_read_frames_and_box_velocity() {
     let above_box = glam::Vec3::new(0.4, 0.3, -0.01 + 0.15);
     assert!((tcp - above_box).length() < 3.2e-3, "tcp at {tcp}");
 
-    let mut env = env(1, &[launch, critic]);
+    let mut env = env(1, &[LAUNCH_BOX, critic]);
     env.reset().unwrap();
     let zero = vec![0.0; env.action_dim()];
     for _ in 0..5 {
@@ -503,13 +485,9 @@ fn privileged_critic_terms_read_frames_and_box_velocity() {
     );
     assert!(lin[0].abs() < 0.01 && lin[2].abs() < 0.01, "{lin:?}");
     assert!(ang.iter().all(|w| w.abs() < 0.05), "the box turns: {ang:?}");
-    let bad_frame = make(
-        TASK,
-        &["observations.critic=(terms: {\"tip\": (func: \"frame_pos\", params: (frame: \"rod_tipp\"))})".into()],
-    )
-    .err()
-    .unwrap()
-    .to_string();
+    let bad_frame = config_error(
+        "observations.critic=(terms: {\"tip\": (func: \"frame_pos\", params: (frame: \"rod_tipp\"))})",
+    );
     assert!(
         bad_frame.contains("observations.critic.terms.tip.params.frame")
             && bad_frame.contains("rod_tipp"),
@@ -633,7 +611,7 @@ fn mass_randomisation_changes_gravity_torques() {
 
     // A range that could make a mass negative is refused, naming the field.
     let bad = "events.light=(func: \"randomize_rigid_body_mass\", params: (asset: \"box\", mass_distribution_params: (-5.0, 0.0), operation: Add), mode: Reset)";
-    let err = make(TASK, &[bad.into()]).err().unwrap().to_string();
+    let err = config_error(bad);
     assert!(err.contains("events.light") && err.contains("> 0"), "{err}");
 }
 
