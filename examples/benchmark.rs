@@ -53,6 +53,10 @@ struct Args {
     /// Scene config overrides `key.path=value`.
     #[arg(long = "set")]
     overrides: Vec<String>,
+    /// Overrides of the full env's task config `key.path=value`, as `train` takes them
+    /// without the `env.` prefix (e.g. an extra observation term).
+    #[arg(long = "env-set")]
+    env_overrides: Vec<String>,
     /// Actions of the full-env column: small sines (the arm stays near its start and the rod
     /// in the box), or standard-normal noise per env and joint, as an untrained policy with
     /// initial noise std 1.0 acts (the arm sweeps the table: more contacts per env).
@@ -94,6 +98,7 @@ fn full_env(args: &Args, n: usize) -> Result<FullEnv, Box<dyn std::error::Error>
     overrides.push(format!("sim.num_threads={}", args.threads));
     overrides.push(format!("sim.solver_iterations={}", args.solver_iterations));
     overrides.push(format!("decimation={}", args.decimation));
+    overrides.extend(args.env_overrides.iter().cloned());
     let mut env = orbit::make(&args.task, &overrides)?;
     env.reset()?;
     if args.staggered {

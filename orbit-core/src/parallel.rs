@@ -25,6 +25,20 @@ pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
         .install(f)
 }
 
+/// Fills `out`, `dim` values per env, with `row(env, values)` for every env; envs run in
+/// parallel in tasks of at least [`MIN_ENVS_PER_TASK`]. The loop of a per-env term (a
+/// reward, an observation) that reads only its env's state.
+pub fn fill_rows(out: &mut [f32], dim: usize, row: impl Fn(usize, &mut [f32]) + Sync + Send) {
+    use rayon::prelude::*;
+    if dim == 0 {
+        return;
+    }
+    out.par_chunks_mut(dim)
+        .enumerate()
+        .with_min_len(MIN_ENVS_PER_TASK)
+        .for_each(|(e, values)| row(e, values));
+}
+
 /// Values per parallel task for element-wise scans of a batch (well under a nanosecond each):
 /// 4 096 envs' observations are scanned on one thread.
 const MIN_VALUES_PER_TASK: usize = 1 << 18;

@@ -252,51 +252,90 @@ impl ObservationManager {
                 .par_iter_mut()
                 .for_each(|t| t.term.compute(env, &mut t.buf));
         });
-        // Noise draws follow term order within each env's stream, so the terms go in order.
+        // Noise draws follow term order within each env's stream: the terms go in order.
+        let streams = noise.streams_mut();
         for g in &mut self.groups {
+            let (dim, terms) = (g.dim, &mut g.terms);
             let mut offset = 0;
-            for t in &mut g.terms {
-                let d = t.term.dim();
-                let width = t.out_dim();
-                if d == 0 {
+            let mut first = 0;
+            while first < terms.len() {
+                if terms[first].history > 0 {
+                    offset += terms[first].write_history(&mut g.values, dim, offset, streams);
+                    first += 1;
                     continue;
                 }
-                let columns = offset..offset + width;
-                // Per env: its row, its group columns, its history and its noise stream, so
-                // the envs run in parallel with the same result.
-                let rows = t
-                    .buf
-                    .par_chunks_mut(d)
-                    .zip(g.values.par_chunks_mut(g.dim))
-                    .zip(noise.streams_mut().par_iter_mut())
-                    .with_min_len(MIN_ENVS_PER_TASK);
-                let (cfg, history) = ((t.noise, t.clip, t.scale), t.history);
-                if history == 0 {
-                    rows.for_each(|((row, out), rng)| {
-                        corrupt(cfg, rng, row);
-                        out[columns.clone()].copy_from_slice(row);
+                // A run of terms without history: one pass over the envs writes them all.
+                let end = terms[first..]
+                    .iter()
+                    .position(|t| t.history > 0)
+                    .map_or(terms.len(), |k| first + k);
+                let run = &terms[first..end];
+                g.values
+                    .par_chunks_mut(dim)
+                    .zip(streams.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(MIN_ENVS_PER_TASK)
+                    .for_each(|(e, (out, rng))| {
+                        let mut column = offset;
+                        for t in run {
+                            let d = t.term.dim();
+                            let values = &mut out[column..column + d];
+                            values.copy_from_slice(&t.buf[e * d..(e + 1) * d]);
+                            corrupt(t.corruption(), rng, values);
+                            column += d;
+                        }
                     });
-                } else {
-                    rows.zip(t.hist.par_chunks_mut(d * history))
-                        .zip(t.fresh.par_iter_mut())
-                        .for_each(|((((row, out), rng), hist), fresh)| {
-                            corrupt(cfg, rng, row);
-                            if std::mem::replace(fresh, false) {
-                                hist.chunks_exact_mut(d)
-                                    .for_each(|slot| slot.copy_from_slice(row));
-                            } else {
-                                hist.copy_within(d.., 0);
-                                let last = hist.len() - d;
-                                hist[last..].copy_from_slice(row);
-                            }
-                            out[columns.clone()].copy_from_slice(hist);
-                        });
-                }
-                offset += width;
+                offset += run.iter().map(ObsTerm::out_dim).sum::<usize>();
+                first = end;
             }
         }
     }
 }
+
+impl ObsTerm {
+    /// Noise, clip and scale, as [`corrupt`] takes them.
+    fn corruption(&self) -> Corruption {
+        (self.noise, self.clip, self.scale)
+    }
+
+    /// Corrupts this term's fresh values, shifts them into its history and writes the history
+    /// (oldest first) into the group's columns from `offset`; returns the columns written.
+    fn write_history(
+        &mut self,
+        values: &mut [f32],
+        dim: usize,
+        offset: usize,
+        streams: &mut [EnvRng],
+    ) -> usize {
+        let (d, width, corruption) = (self.term.dim(), self.out_dim(), self.corruption());
+        if d == 0 {
+            return 0;
+        }
+        self.buf
+            .par_chunks_mut(d)
+            .zip(values.par_chunks_mut(dim))
+            .zip(streams.par_iter_mut())
+            .zip(self.hist.par_chunks_mut(width))
+            .zip(self.fresh.par_iter_mut())
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .for_each(|((((row, out), rng), hist), fresh)| {
+                corrupt(corruption, rng, row);
+                if std::mem::replace(fresh, false) {
+                    hist.chunks_exact_mut(d)
+                        .for_each(|slot| slot.copy_from_slice(row));
+                } else {
+                    hist.copy_within(d.., 0);
+                    let last = hist.len() - d;
+                    hist[last..].copy_from_slice(row);
+                }
+                out[offset..offset + width].copy_from_slice(hist);
+            });
+        width
+    }
+}
+
+/// A term's noise, clip and scale.
+type Corruption = (Option<NoiseCfg>, Option<(f32, f32)>, Option<f32>);
 
 /// Prepares for computing a manager's terms concurrently (each reads only the env's state and
 /// writes only its own buffer, so their own loops over envs share the pool instead of
@@ -309,11 +348,7 @@ fn before_concurrent_terms(env: &EnvView<'_>) {
 }
 
 /// Adds a term's noise to one env's row, then clips and scales it (Isaac Lab's order).
-fn corrupt(
-    (noise, clip, scale): (Option<NoiseCfg>, Option<(f32, f32)>, Option<f32>),
-    rng: &mut EnvRng,
-    row: &mut [f32],
-) {
+fn corrupt((noise, clip, scale): Corruption, rng: &mut EnvRng, row: &mut [f32]) {
     if noise.is_none() && clip.is_none() && scale.is_none() {
         return;
     }

@@ -64,16 +64,20 @@ pub struct JointSel {
 impl JointSel {
     /// Per env, `Σ_k f(k, x[selected dof k])` over a `num_envs × num_dofs` array `x` (joint
     /// positions or velocities): the shape of every joint-penalty term.
-    pub fn sum_per_env(&self, x: &[f32], out: &mut [f32], f: impl Fn(usize, f32) -> f32) {
-        let n = self.num_dofs;
-        for (e, o) in out.iter_mut().enumerate() {
-            *o = self
-                .dofs
+    pub fn sum_per_env(
+        &self,
+        x: &[f32],
+        out: &mut [f32],
+        f: impl Fn(usize, f32) -> f32 + Sync + Send,
+    ) {
+        let (n, dofs) = (self.num_dofs, &self.dofs);
+        orbit_core::parallel::fill_rows(out, 1, |e, o| {
+            o[0] = dofs
                 .iter()
                 .enumerate()
                 .map(|(k, &j)| f(k, x[e * n + j]))
                 .sum();
-        }
+        });
     }
 
     /// Resolves a joint selection for a term.

@@ -1,6 +1,7 @@
 //! Observation terms: joint state, actions, commands, object poses and velocities, frame
 //! positions.
 use super::*;
+use orbit_core::parallel::fill_rows;
 
 /// `joint_pos_rel` / `joint_vel_rel`: selected joint positions or velocities minus defaults.
 struct JointRel {
@@ -21,11 +22,12 @@ impl ObservationTerm for JointRel {
             view.joint_pos
         };
         let (n, d) = (self.sel.num_dofs, self.dim());
-        for (e, row) in out.chunks_exact_mut(d).enumerate() {
-            for (k, &j) in self.sel.dofs.iter().enumerate() {
-                row[k] = src[e * n + j] - self.default[j];
+        let (dofs, default) = (&self.sel.dofs, &self.default);
+        fill_rows(out, d, |e, row| {
+            for (k, &j) in dofs.iter().enumerate() {
+                row[k] = src[e * n + j] - default[j];
             }
-        }
+        });
     }
 }
 
@@ -128,17 +130,13 @@ impl ObservationTerm for RootState {
     }
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
         let view = env.scene.backend.rigid_object(self.object);
-        let d = self.dim();
-        for (e, row) in out.chunks_exact_mut(d).enumerate() {
-            match self.quantity {
-                RootQuantity::Pos => row.copy_from_slice(&view.pos[e].to_array()),
-                RootQuantity::Quat => {
-                    row.copy_from_slice(&orbit_core::math::to_wxyz(view.quat[e]));
-                }
-                RootQuantity::LinVel => row.copy_from_slice(&view.lin_vel[e].to_array()),
-                RootQuantity::AngVel => row.copy_from_slice(&view.ang_vel[e].to_array()),
-            }
-        }
+        let quantity = self.quantity;
+        fill_rows(out, self.dim(), |e, row| match quantity {
+            RootQuantity::Pos => row.copy_from_slice(&view.pos[e].to_array()),
+            RootQuantity::Quat => row.copy_from_slice(&orbit_core::math::to_wxyz(view.quat[e])),
+            RootQuantity::LinVel => row.copy_from_slice(&view.lin_vel[e].to_array()),
+            RootQuantity::AngVel => row.copy_from_slice(&view.ang_vel[e].to_array()),
+        });
     }
 }
 
@@ -193,10 +191,10 @@ impl ObservationTerm for FramePos {
     }
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
         let view = env.scene.backend.articulation(self.articulation);
-        for (e, row) in out.chunks_exact_mut(3).enumerate() {
-            let pos = view.frame_pose(e, self.link, &self.offset).pos;
-            row.copy_from_slice(&pos.to_array());
-        }
+        let (link, offset) = (self.link, &self.offset);
+        fill_rows(out, 3, |e, row| {
+            row.copy_from_slice(&view.frame_pose(e, link, offset).pos.to_array());
+        });
     }
 }
 
@@ -256,10 +254,10 @@ impl ObservationTerm for ObjectInRobot {
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
         let robot = env.scene.backend.articulation(self.robot);
         let object = env.scene.backend.rigid_object(self.object);
-        for (e, row) in out.chunks_exact_mut(3).enumerate() {
+        fill_rows(out, 3, |e, row| {
             let root = robot.link_pose(e, 0);
             row.copy_from_slice(&root.inverse().transform_point(object.pos[e]).to_array());
-        }
+        });
     }
 }
 

@@ -7,11 +7,11 @@ struct ActionRate;
 impl RewardTerm for ActionRate {
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
         let d = env.action_dim;
-        for (e, o) in out.iter_mut().enumerate() {
-            *o = (0..d)
+        orbit_core::parallel::fill_rows(out, 1, |e, o| {
+            o[0] = (0..d)
                 .map(|i| (env.action[e * d + i] - env.prev_action[e * d + i]).powi(2))
                 .sum();
-        }
+        });
     }
 }
 

@@ -622,9 +622,11 @@ fn mass_randomisation_changes_gravity_torques() {
 fn envs_in_parallel_give_the_same_bits_on_any_number_of_threads() {
     let n = 2 * orbit_core::parallel::MIN_ENVS_PER_TASK + 5;
     let noisy = "observations.policy.terms.q_hist=(func: \"joint_pos\", history_length: 2, noise: Some(Gaussian(mean: 0.0, std: 0.01)))";
+    // A noisy term without history after the history term: drawn in a second pass over envs.
+    let noisy_after = "observations.policy.terms.zz_qd=(func: \"joint_vel\", noise: Some(Uniform(n_min: -0.1, n_max: 0.1)))";
     let run = |threads: usize| {
         orbit_core::parallel::on_threads(threads, || {
-            let mut env = env(n, &[noisy, "sim.num_threads=1"]);
+            let mut env = env(n, &[noisy, noisy_after, "sim.num_threads=1"]);
             env.reset().unwrap();
             let act: Vec<f32> = (0..n * env.action_dim())
                 .map(|i| ((i % 13) as f32 - 6.0) * 0.05)
