@@ -642,3 +642,31 @@ fn envs_in_parallel_give_the_same_bits_on_any_number_of_threads() {
     let d = o1.len() / n;
     assert_ne!(o1[..d], o1[d..2 * d], "envs draw different noise");
 }
+
+/// The step-based tasks' policy observation: Fancy Gym's 28 values and the last action (7 joint
+/// targets, or a 6-d tcp pose change), then the rod tip and the box's linear and angular
+/// velocity. At reset the rod points down from
+/// the IK pose, so its tip (hand + 0.2 m) sits 9.5 cm below the tcp (hand + 0.105 m), over the
+/// box's default position; 5 mm allows the IK's 3.2 mm and its orientation error along the
+/// rod. The box rests.
+#[test]
+fn step_based_policy_observes_rod_tip_and_box_velocity() {
+    for task in [
+        "BoxPushing-JointPos-Franka-v0",
+        "BoxPushing-TaskSpace-Franka-v0",
+    ] {
+        let mut env = make(task, &["num_envs=1".into()]).unwrap_or_else(|e| panic!("{e}"));
+        env.reset().unwrap();
+        let (obs, d) = env.observation("policy").unwrap();
+        let extra = 28 + env.action_dim();
+        assert_eq!(d, extra + 9, "{task}");
+        let tip = glam::Vec3::from_slice(&obs[extra..extra + 3]);
+        let expected = glam::Vec3::new(0.4, 0.3, -0.01 + 0.15 - 0.095);
+        println!("{task}: rod tip at {tip}");
+        assert!((tip - expected).length() < 5e-3, "{task}: rod tip at {tip}");
+        assert!(
+            obs[extra + 3..].iter().all(|v| v.abs() < 1e-6),
+            "{task}: {obs:?}"
+        );
+    }
+}
