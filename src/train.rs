@@ -356,9 +356,12 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     };
     if env.num_obs() != policy.num_obs() {
         return Err(RlError::EnvMismatch(format!(
-            "the policy expects {} observations, the env gives {}",
+            "the policy expects {} observations, the env gives {}: the env config it was \
+             trained with is in {} (a task's observation terms may have changed since: set \
+             them back with `env.observations.policy…` overrides, or train a new policy)",
             policy.num_obs(),
-            env.num_obs()
+            env.num_obs(),
+            base.with_file_name("params").join("env.ron").display()
         ))
         .into());
     }

@@ -416,8 +416,10 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             return Err(RlError::checkpoint(
                 base.with_extension("json"),
                 format!(
-                    "trained for (obs, critic obs, actions) = {:?}, this env has {dims:?}",
-                    (state.num_obs, state.num_critic_obs, state.num_actions)
+                    "trained for (obs, critic obs, actions) = {:?}, this env has {dims:?}: \
+                     resume with the env config of the checkpoint's run ({}), or train anew",
+                    (state.num_obs, state.num_critic_obs, state.num_actions),
+                    base.with_file_name("params").join("env.ron").display()
                 ),
             ));
         }

@@ -12,11 +12,22 @@ fn runner(
     log_dir: Option<std::path::PathBuf>,
     agent_overrides: &[&str],
 ) -> OnPolicyRunner<RlVecEnv> {
-    let o = [
+    runner_on(seed, log_dir, agent_overrides, &[])
+}
+
+/// [`runner`] on an env with extra env overrides.
+fn runner_on(
+    seed: u64,
+    log_dir: Option<std::path::PathBuf>,
+    agent_overrides: &[&str],
+    env_overrides: &[&str],
+) -> OnPolicyRunner<RlVecEnv> {
+    let mut o = vec![
         "num_envs=8".to_string(),
         format!("seed={seed}"),
         "episode_length_s=0.5".into(),
     ];
+    o.extend(env_overrides.iter().map(|s| s.to_string()));
     let env = RlVecEnv::new(make(TASK_ID, &o).unwrap_or_else(|e| panic!("{e}"))).unwrap();
     let def = orbit_managers::agent_cfg(TASK_ID, "rsl_rl").unwrap();
     let mut o = vec![
@@ -108,5 +119,24 @@ fn checkpoints_restore_the_policy_and_the_run_directory_is_complete() {
         resumed.inference_policy().act(&obs),
         r.inference_policy().act(&obs)
     );
+    // An env whose observation gained a term refuses the checkpoint, naming both sizes and
+    // the run's env config, and keeps its own state.
+    let wider = ["observations.policy.terms.extra=(func: \"joint_vel\")"];
+    let mut other = runner_on(3, None, &value_norm, &wider);
+    let err = other
+        .load_checkpoint(&dir.join("model_3"))
+        .unwrap_err()
+        .to_string();
+    let (n, m) = (r.env.num_obs(), other.env.num_obs());
+    assert!(m > n, "{m} vs {n}");
+    assert!(
+        err.contains(&format!("({n}, {n}, ")) && err.contains(&format!("({m}, {m}, ")),
+        "{err}"
+    );
+    assert!(
+        err.contains(&dir.join("params").join("env.ron").display().to_string()),
+        "{err}"
+    );
+    assert_eq!(other.iteration, 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
