@@ -3,11 +3,10 @@
 
 use glam::Quat;
 use orbit_core::math::{Pose, rotation_distance};
-use orbit_core::parallel::MIN_ENVS_PER_TASK;
+use orbit_core::parallel::fill_rows;
 use orbit_managers::mdp::command_pose;
 use orbit_managers::term::{RewardTerm, RewardTermDef, TermContext};
 use orbit_managers::{EnvError, EnvView};
-use rayon::prelude::*;
 use serde::Deserialize;
 
 /// Scene names the box-pushing terms refer to.
@@ -160,60 +159,54 @@ impl RewardTerm for BoxPushingTerm {
         let refs = &self.refs;
         let quantity = self.quantity;
         // Envs are independent: computed in parallel, each by the same operations.
-        out.par_iter_mut()
-            .with_min_len(MIN_ENVS_PER_TASK)
-            .enumerate()
-            .for_each(|(e, o)| {
-                if refs.only_at_end && env.episode_length[e] < env.max_episode_length {
-                    *o = 0.0;
-                    return;
+        fill_rows(out, 1, |e, o| {
+            if refs.only_at_end && env.episode_length[e] < env.max_episode_length {
+                o[0] = 0.0;
+                return;
+            }
+            let frame = |(link, offset): (usize, Pose)| arm.frame_pose(e, link, &offset);
+            o[0] = match quantity {
+                Quantity::RodTipDistance => {
+                    let tip = frame(refs.rod_tip).pos;
+                    (objects.pos[e] - tip).length().clamp(0.05, 100.0)
                 }
-                let frame = |(link, offset): (usize, Pose)| arm.frame_pose(e, link, &offset);
-                *o = match quantity {
-                    Quantity::RodTipDistance => {
-                        let tip = frame(refs.rod_tip).pos;
-                        (objects.pos[e] - tip).length().clamp(0.05, 100.0)
+                Quantity::GoalDistance => (objects.pos[e] - target_pose(cmd, e).pos).length(),
+                Quantity::GoalRotation => {
+                    rotation_distance(objects.quat[e], target_pose(cmd, e).rot)
+                        / std::f32::consts::PI
+                }
+                Quantity::RodInclination => {
+                    let phi = rotation_distance(frame(refs.rod).rot, down);
+                    if phi > std::f32::consts::FRAC_PI_4 {
+                        phi / std::f32::consts::PI
+                    } else {
+                        0.0
                     }
-                    Quantity::GoalDistance => (objects.pos[e] - target_pose(cmd, e).pos).length(),
-                    Quantity::GoalRotation => {
-                        rotation_distance(objects.quat[e], target_pose(cmd, e).rot)
-                            / std::f32::consts::PI
+                }
+                Quantity::Energy => processed.map_or(0.0, |u| {
+                    let d = u.len() / n;
+                    u[e * d..(e + 1) * d].iter().map(|x| x * x).sum()
+                }),
+                Quantity::JointSpeed => {
+                    let d = arm.joint_vel.len() / n;
+                    arm.joint_vel[e * d..(e + 1) * d]
+                        .iter()
+                        .map(|x| x * x)
+                        .sum::<f32>()
+                        .sqrt()
+                }
+                Quantity::SpatialBonus => {
+                    let target = target_pose(cmd, e);
+                    let d = (objects.pos[e] - target.pos).length();
+                    let rho = rotation_distance(objects.quat[e], target.rot) / std::f32::consts::PI;
+                    if d < 0.1 {
+                        300.0 + (-1050.0 * d).clamp(-100.0, 0.0) + (-150.0 * rho).clamp(-100.0, 0.0)
+                    } else {
+                        0.0
                     }
-                    Quantity::RodInclination => {
-                        let phi = rotation_distance(frame(refs.rod).rot, down);
-                        if phi > std::f32::consts::FRAC_PI_4 {
-                            phi / std::f32::consts::PI
-                        } else {
-                            0.0
-                        }
-                    }
-                    Quantity::Energy => processed.map_or(0.0, |u| {
-                        let d = u.len() / n;
-                        u[e * d..(e + 1) * d].iter().map(|x| x * x).sum()
-                    }),
-                    Quantity::JointSpeed => {
-                        let d = arm.joint_vel.len() / n;
-                        arm.joint_vel[e * d..(e + 1) * d]
-                            .iter()
-                            .map(|x| x * x)
-                            .sum::<f32>()
-                            .sqrt()
-                    }
-                    Quantity::SpatialBonus => {
-                        let target = target_pose(cmd, e);
-                        let d = (objects.pos[e] - target.pos).length();
-                        let rho =
-                            rotation_distance(objects.quat[e], target.rot) / std::f32::consts::PI;
-                        if d < 0.1 {
-                            300.0
-                                + (-1050.0 * d).clamp(-100.0, 0.0)
-                                + (-150.0 * rho).clamp(-100.0, 0.0)
-                        } else {
-                            0.0
-                        }
-                    }
-                };
-            });
+                }
+            };
+        });
     }
 }
 
@@ -269,16 +262,16 @@ impl RewardTerm for JointLimitViolation {
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
         let v = env.scene.backend.articulation(self.robot);
         let (n, p) = (self.p.q_min.len(), &self.p);
-        out.par_iter_mut()
-            .with_min_len(MIN_ENVS_PER_TASK)
-            .zip(v.joint_pos.par_chunks(n))
-            .zip(v.joint_vel.par_chunks(n))
-            .for_each(|((o, q), qd)| {
-                let above: f32 = (0..n).map(|i| (q[i] - p.q_max[i]).max(0.0)).sum();
-                let below: f32 = (0..n).map(|i| (p.q_min[i] - q[i]).max(0.0)).sum();
-                let fast: f32 = (0..n).map(|i| (qd[i].abs() - p.qd_max[i]).max(0.0)).sum();
-                *o = above + below + fast;
-            });
+        fill_rows(out, 1, |e, o| {
+            let (q, qd) = (
+                &v.joint_pos[e * n..(e + 1) * n],
+                &v.joint_vel[e * n..(e + 1) * n],
+            );
+            let above: f32 = (0..n).map(|i| (q[i] - p.q_max[i]).max(0.0)).sum();
+            let below: f32 = (0..n).map(|i| (p.q_min[i] - q[i]).max(0.0)).sum();
+            let fast: f32 = (0..n).map(|i| (qd[i].abs() - p.qd_max[i]).max(0.0)).sum();
+            o[0] = above + below + fast;
+        });
     }
 }
 
