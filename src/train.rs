@@ -8,7 +8,9 @@ use clap::Parser;
 use orbit_core::config::Node;
 use orbit_render::VideoCfg;
 use orbit_rl::burn::tensor::Device;
-use orbit_rl::run_dir::{new_run_dir, resolve_checkpoint};
+use orbit_rl::run_dir::{
+    ENV_CONFIG_FILE, PARAMS_DIR, checkpoint_env_config, new_run_dir, resolve_checkpoint,
+};
 use orbit_rl::{OnPolicyRunner, Policy, RlError, RunnerCfg, VecEnv};
 
 /// The learning library whose configs `train` reads (`AgentCfgDef::library`).
@@ -190,12 +192,12 @@ fn write_params(
     task: &str,
     run: &ResolvedRun,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let params = dir.join("params");
+    let params = dir.join(PARAMS_DIR);
     std::fs::create_dir_all(&params).map_err(RlError::io(&params))?;
     let (t, all) = orbit_managers::resolve_task(task, &run.env_overrides)?;
     let env_doc = orbit_core::config::parse_document(t.config, t.file_name, &all)?;
     let mut files = vec![
-        ("env.ron", env_doc.to_ron()),
+        (ENV_CONFIG_FILE, env_doc.to_ron()),
         ("agent.ron", run.agent_doc.to_ron()),
     ];
     if let Some(bb) = orbit_managers::black_box_task(task) {
@@ -361,7 +363,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
              them back with `env.observations.policy…` overrides, or train a new policy)",
             policy.num_obs(),
             env.num_obs(),
-            base.with_file_name("params").join("env.ron").display()
+            checkpoint_env_config(&base).display()
         ))
         .into());
     }

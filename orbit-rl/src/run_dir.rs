@@ -7,6 +7,17 @@ use regex::Regex;
 
 use crate::RlError;
 
+/// The folder of a run directory that holds the run's resolved configs.
+pub const PARAMS_DIR: &str = "params";
+
+/// The resolved env config in [`PARAMS_DIR`].
+pub const ENV_CONFIG_FILE: &str = "env.ron";
+
+/// The resolved env config of the run that wrote the checkpoint `base` (`<run>/model_<it>`).
+pub fn checkpoint_env_config(base: &Path) -> PathBuf {
+    base.with_file_name(PARAMS_DIR).join(ENV_CONFIG_FILE)
+}
+
 /// The directory of a new run under `log_root/<experiment>/`, named by the local time.
 pub fn new_run_dir(log_root: &Path, experiment: &str, run_name: &str) -> PathBuf {
     let stamp = chrono::Local::now().format("%Y-%m-%d_%H-%M-%S").to_string();

@@ -419,7 +419,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                     "trained for (obs, critic obs, actions) = {:?}, this env has {dims:?}: \
                      resume with the env config of the checkpoint's run ({}), or train anew",
                     (state.num_obs, state.num_critic_obs, state.num_actions),
-                    base.with_file_name("params").join("env.ron").display()
+                    crate::run_dir::checkpoint_env_config(base).display()
                 ),
             ));
         }
