@@ -71,10 +71,10 @@ impl Default for BoxPushingParams {
 
 /// Resolved scene indices shared by the terms.
 #[derive(Clone)]
-struct Refs {
+pub(crate) struct Refs {
     robot: usize,
-    object: usize,
-    command: String,
+    pub(crate) object: usize,
+    pub(crate) command: String,
     rod_tip: (usize, Pose),
     rod: (usize, Pose),
     action: String,
@@ -82,7 +82,8 @@ struct Refs {
 }
 
 impl Refs {
-    fn resolve(ctx: &TermContext<'_>) -> Result<Self, EnvError> {
+    /// Reads the term's [`BoxPushingParams`] and looks its names up in the scene.
+    pub(crate) fn resolve(ctx: &TermContext<'_>) -> Result<Self, EnvError> {
         let p: BoxPushingParams = ctx.params()?;
         let f = |s: &str| format!("{}.params.{s}", ctx.field);
         let robot = ctx.scene.articulation(&f("robot"), &p.robot)?;
@@ -115,7 +116,7 @@ impl Refs {
 }
 
 /// Target pose of env `e` from the 7-wide pose command rows `cmd`.
-fn target_pose(cmd: &[f32], e: usize) -> Pose {
+pub(crate) fn target_pose(cmd: &[f32], e: usize) -> Pose {
     command_pose(&cmd[e * 7..(e + 1) * 7])
 }
 

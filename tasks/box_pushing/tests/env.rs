@@ -644,13 +644,13 @@ fn envs_in_parallel_give_the_same_bits_on_any_number_of_threads() {
 }
 
 /// The step-based tasks' policy observation: Fancy Gym's 28 values and the last action (7 joint
-/// targets, or a 6-d tcp pose change), then the rod tip and the box's linear and angular
-/// velocity. At reset the rod points down from
-/// the IK pose, so its tip (hand + 0.2 m) sits 9.5 cm below the tcp (hand + 0.105 m), over the
-/// box's default position; 5 mm allows the IK's 3.2 mm and its orientation error along the
-/// rod. The box rests.
+/// targets, or a 6-d tcp pose change), then the rod tip, the box's linear and angular velocity
+/// and `box_goal_error`. At reset the rod points down from the IK pose, so its tip
+/// (hand + 0.2 m) sits 9.5 cm below the tcp (hand + 0.105 m), over the box's default position;
+/// 5 mm allows the IK's 3.2 mm and its orientation error along the rod. The box rests, and its
+/// position error is the target's position minus its own, to the bit (the same f32 values).
 #[test]
-fn step_based_policy_observes_rod_tip_and_box_velocity() {
+fn step_based_policy_observes_rod_tip_box_velocity_and_goal_error() {
     for task in [
         "BoxPushing-JointPos-Franka-v0",
         "BoxPushing-TaskSpace-Franka-v0",
@@ -659,14 +659,82 @@ fn step_based_policy_observes_rod_tip_and_box_velocity() {
         env.reset().unwrap();
         let (obs, d) = env.observation("policy").unwrap();
         let extra = 28 + env.action_dim();
-        assert_eq!(d, extra + 9, "{task}");
+        assert_eq!(d, extra + 18, "{task}");
         let tip = glam::Vec3::from_slice(&obs[extra..extra + 3]);
         let expected = glam::Vec3::new(0.4, 0.3, -0.01 + 0.15 - 0.095);
         println!("{task}: rod tip at {tip}");
         assert!((tip - expected).length() < 5e-3, "{task}: rod tip at {tip}");
         assert!(
-            obs[extra + 3..].iter().all(|v| v.abs() < 1e-6),
+            obs[extra + 3..extra + 9].iter().all(|v| v.abs() < 1e-6),
             "{task}: {obs:?}"
         );
+        let (box_pos, target) = (&obs[14..17], &obs[21..24]);
+        for i in 0..3 {
+            assert_eq!(
+                obs[extra + 9 + i],
+                target[i] - box_pos[i],
+                "{task}: {obs:?}"
+            );
+        }
     }
+}
+
+/// `box_goal_error` against the pose observations beside it, for boxes and targets at random
+/// yaws (both draw their yaw from the whole turn, so the quaternions' signs flip between envs):
+/// the first three values are `p_target − p_box`, the next six the columns `(cos Δ, sin Δ, 0)`
+/// and `(−sin Δ, cos Δ, 0)` of the yaw `Δ = ψ_target − ψ_box` that takes the box onto the
+/// target (both rest flat, so the rotation is a pure yaw). Tolerance 1e-5: f32 rounding.
+#[test]
+fn box_goal_error_is_the_target_seen_from_the_box() {
+    let yaw = |q: &[f32]| {
+        let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
+        (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+    };
+    let mut env = env(
+        16,
+        &[
+            "events.random_box=(func: \"reset_root_state_uniform\", params: (asset: \"box\", yaw_range: (0.0, 6.283185307)), mode: Reset)",
+            "observations.policy.terms.goal_error=(func: \"box_goal_error\")",
+        ],
+    );
+    env.reset().unwrap();
+    let (obs, d) = env.observation("policy").unwrap();
+    assert_eq!(d, 28 + env.action_dim() + 9);
+    let mut flipped = 0;
+    for row in obs.chunks(d) {
+        let (box_pos, box_quat, target, error) =
+            (&row[14..17], &row[17..21], &row[21..28], &row[d - 9..]);
+        flipped += usize::from(box_quat[0] * target[3] < 0.0);
+        let delta = yaw(&target[3..]) - yaw(box_quat);
+        let (s, c) = delta.sin_cos();
+        let expected = [
+            target[0] - box_pos[0],
+            target[1] - box_pos[1],
+            target[2] - box_pos[2],
+            c,
+            s,
+            0.0,
+            -s,
+            c,
+            0.0,
+        ];
+        for (got, want) in error.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-5, "{error:?} against {expected:?}");
+        }
+    }
+    assert!(flipped > 0, "no env had quaternions of opposite signs");
+}
+
+/// `box_goal_error` names what it needs: a 7-d pose command.
+#[test]
+fn box_goal_error_needs_a_pose_command() {
+    let err = config_error(
+        "observations.policy.terms.goal_error=(func: \"box_goal_error\", params: (command: \"goal\"))",
+    );
+    assert!(
+        err.contains(
+            "observations.policy.terms.goal_error: params.command: no 7-d pose command named `goal`"
+        ) && err.contains("target"),
+        "{err}"
+    );
 }
