@@ -1,5 +1,5 @@
 # A/B of train builds on one host, runs one after the other: BIG names the builds run at
-# NE envs (default 65 536) with the paper's 5 epochs x 4 minibatches (6 iterations), SMALL
+# NE envs (default 65 536) with the paper's 5 epochs x 4 minibatches (BIT iterations, default 6), SMALL
 # those run at 4 096 envs with the registered config (IT iterations, default 12). A build name <n> is the
 # binary .dev/<n>.xz, e.g. BIG="train train_old train train_old" SMALL="train train_old".
 # XS adds config overrides to every run (e.g. XS="agent.policy.actor_hidden_dims=[512,256,128]").
@@ -15,6 +15,6 @@ run() { # binary envs iterations overrides...
     echo " $t: $(col $f $t | awk -F, '{printf "%.4g ",$2}')"; done
 }
 for b in $BIG; do
-  run $b ${NE:-65536} 6 agent.algorithm.num_learning_epochs=5 agent.algorithm.num_mini_batches=4
+  run $b ${NE:-65536} ${BIT:-6} agent.algorithm.num_learning_epochs=5 agent.algorithm.num_mini_batches=4
 done
 for b in $SMALL; do run $b 4096 ${IT:-12}; done

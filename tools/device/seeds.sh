@@ -5,7 +5,7 @@
 # with the run's scalars, configs and last checkpoint (pull.sh unpacks them).
 #   SEEDS="1 2 3" TAG=x XS="agent.algorithm.desired_kl=0.02" MI=160 TO=500 bash tools/device/seeds.sh
 source tools/device/common.sh
-MI=${MI:-160}; TO=${TO:-540}
+MI=${MI:-160}; TO=${TO:-540}; BIN=${BIN:-train}
 mkdir -p /tmp/runs
 for s in $SEEDS; do
   r=$TAG-s$s; root=/tmp/runs/$r; res=""; left=$MI
@@ -15,7 +15,7 @@ for s in $SEEDS; do
     res="--resume"; left=$((MI - last - 1))
   fi
   echo "seed $s: $left iterations $res"
-  timeout $TO /tmp/bin/train --backend wgpu --rl-device gpu --seed $s --log-root $root \
+  timeout $TO /tmp/bin/$BIN --backend wgpu --rl-device gpu --seed $s --log-root $root \
     --max-iterations $left $res agent.save_interval=10 $XS > $root.log 2>&1 &
   sleep 2
 done
