@@ -49,7 +49,7 @@ const SOFT_STEP_CONTACTS: &str = "sim.contact.model=SoftStep(frequency: 200.0, d
 /// poses, the error from the two poses, whose quaternions change sign somewhere on every
 /// turn), but a small MLP learns to push sooner and more reliably when they are spelt out:
 /// success at 1.5e7 interactions rose from a mean of 0.92-0.94 to 0.98 with the first three
-/// terms (nine seeds), and to 0.97-1.00 in every one of twelve seeds with all four
+/// terms (nine seeds), and to 0.974-1.000 in every one of 17 runs with all four
 /// (docs/benchmarks.md).
 const PUSH_OBSERVATIONS: [&str; 4] = [
     "observations.policy.terms.rod_tip=(func: \"frame_pos\", params: (frame: \"rod_tip\"))",
