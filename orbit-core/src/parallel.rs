@@ -56,6 +56,16 @@ pub fn copy(src: &[f32], dst: &mut [f32]) {
         .for_each(|(d, s)| d.copy_from_slice(s));
 }
 
+/// A copy of `src` in a new vector, written on every core for large batches (straight into
+/// the new allocation: no zeroing pass first).
+pub fn to_vec(src: &[f32]) -> Vec<f32> {
+    use rayon::prelude::*;
+    src.par_iter()
+        .with_min_len(MIN_VALUES_PER_TASK)
+        .copied()
+        .collect()
+}
+
 /// Values per block of [`first_non_finite`]: a whole block is checked without branching, so
 /// that the check vectorises, and only a block found to hold a bad value is searched for it.
 const SCAN_BLOCK: usize = 1 << 12;
@@ -89,6 +99,19 @@ fn all_finite(values: &[f32]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A copy split over threads holds every value in its place.
+    #[test]
+    fn to_vec_copies_in_order_on_any_number_of_threads() {
+        let src: Vec<f32> = (0..3 * MIN_VALUES_PER_TASK + 5).map(|i| i as f32).collect();
+        for threads in [1, 3] {
+            assert_eq!(
+                on_threads(threads, || to_vec(&src)),
+                src,
+                "{threads} threads"
+            );
+        }
+    }
 
     #[test]
     fn first_non_finite_is_the_first_on_any_number_of_threads() {

@@ -11,7 +11,7 @@ use std::path::Path;
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::optim::GradientsParams;
 use burn::tensor::{Device, Int, Tensor, TensorData};
-use orbit_core::parallel::{MIN_ENVS_PER_COPY_TASK, MIN_ENVS_PER_TASK, first_non_finite};
+use orbit_core::parallel::{self, MIN_ENVS_PER_COPY_TASK, MIN_ENVS_PER_TASK, first_non_finite};
 use orbit_core::rng::EnvRng;
 use rayon::prelude::*;
 
@@ -55,14 +55,56 @@ pub struct Ppo {
     noise: Vec<EnvRng>,
     /// A gradient-free copy of the model used while collecting a rollout.
     rollout_model: Option<ActorCritic>,
-    /// The actor and critic observations of each stored step, as the tensors the forward pass
-    /// took (already on the device: the update concatenates them instead of uploading the
-    /// rollout's observations again); no critic tensor where the critic saw the actor's.
-    step_obs: Vec<(Tensor<2>, Option<Tensor<2>>)>,
+    /// The device tensors of each stored step (the update concatenates them instead of
+    /// uploading the whole rollout at once).
+    step_tensors: Vec<StepTensors>,
     /// The action standard deviation during the current rollout.
     sigma: Vec<f32>,
     updates: u32,
+    /// The next update's shuffle, drawn on a helper thread while the rollout is collected.
+    next_shuffle: Option<PendingShuffle>,
 }
+
+/// The tensors of one collected step that the update needs, already on the learner's device.
+struct StepTensors {
+    /// The actor's observations, as the forward pass took them.
+    obs: Tensor<2>,
+    /// The critic's, where they are not the actor's.
+    critic_obs: Option<Tensor<2>>,
+    /// The action means the forward pass computed (kept on the device, never uploaded).
+    mu: Tensor<2>,
+    /// The sampled actions, uploaded with the step: a few MB each time, where copying and
+    /// uploading the whole rollout's (with the means) held the host for about a quarter of a
+    /// second at the start of a 131 072-env update before the device had work.
+    actions: Tensor<2>,
+}
+
+/// A shuffle being drawn on a helper thread: the permutation of `len` rows for update number
+/// `updates`.
+struct PendingShuffle {
+    updates: u32,
+    len: usize,
+    handle: std::thread::JoinHandle<Vec<u32>>,
+}
+
+/// The permutation of `0..len` that update number `update` uses in every epoch: a
+/// Fisher–Yates shuffle drawn from the `(seed, update, SHUFFLE)` stream. Serial (each swap
+/// depends on the last), so the runner draws it while the rollout is collected.
+fn shuffle(seed: u64, update: u32, len: usize) -> Vec<u32> {
+    let mut perm: Vec<u32> = (0..len)
+        .map(|i| u32::try_from(i).expect("the update checks the rollout's size"))
+        .collect();
+    let mut rng = EnvRng::new(seed, update, streams::SHUFFLE);
+    for i in (1..len).rev() {
+        let j = ((u64::from(rng.next_u32()) * (i as u64 + 1)) >> 32) as usize;
+        perm.swap(i, j);
+    }
+    perm
+}
+
+/// The largest rollout (envs × steps) an update takes: its rows are indexed by `i32` on the
+/// device.
+const MAX_ROLLOUT_ROWS: usize = i32::MAX as usize;
 
 /// A `[rows, cols]` tensor from row-major values.
 pub(crate) fn tensor2(values: Vec<f32>, rows: usize, cols: usize, device: &Device) -> Tensor<2> {
@@ -73,6 +115,16 @@ pub(crate) fn tensor2(values: Vec<f32>, rows: usize, cols: usize, device: &Devic
 pub(crate) fn tensor1(values: Vec<f32>, device: &Device) -> Tensor<1> {
     let n = values.len();
     Tensor::from_data(TensorData::new(values, [n]), device)
+}
+
+/// Row indices (below [`MAX_ROLLOUT_ROWS`]) as an `i32` tensor, for `select`.
+fn index_tensor(idx: &[u32], device: &Device) -> Tensor<1, Int> {
+    let idx: Vec<i32> = idx
+        .iter()
+        .map(|&i| i32::try_from(i).expect("rows are indexed below i32::MAX"))
+        .collect();
+    let n = idx.len();
+    Tensor::from_data(TensorData::new(idx, [n]), device)
 }
 
 /// A tensor's values, row-major.
@@ -121,9 +173,10 @@ impl Ppo {
             seed,
             noise,
             rollout_model: None,
-            step_obs: Vec::with_capacity(num_steps),
+            step_tensors: Vec::with_capacity(num_steps),
             sigma: Vec::new(),
             updates: 0,
+            next_shuffle: None,
         }
     }
 
@@ -168,24 +221,21 @@ impl Ppo {
             "act called more often than num_steps_per_env"
         );
         // A step that failed before (a non-finite output) is taken again from the start.
-        self.step_obs.truncate(t);
+        self.step_tensors.truncate(t);
+        if t == 0 {
+            self.draw_next_shuffle();
+        }
         let device = self.device.clone();
-        let actor_input = tensor2(obs.to_vec(), n, no, &device);
+        let actor_input = tensor2(parallel::to_vec(obs), n, no, &device);
         // The same values (an env without a `critic` group): uploaded, and later
         // concatenated, once.
-        let critic_input =
-            (!std::ptr::eq(obs, critic_obs)).then(|| tensor2(critic_obs.to_vec(), n, nc, &device));
+        let critic_input = (!std::ptr::eq(obs, critic_obs))
+            .then(|| tensor2(parallel::to_vec(critic_obs), n, nc, &device));
         let critic_view = critic_input.clone().unwrap_or_else(|| actor_input.clone());
-        let inputs = (actor_input, critic_input);
         let model = self.rollout_model();
+        let mean = model.action_mean(actor_input.clone());
         // Means and values come back in one read (each read waits for the device).
-        let out = values(Tensor::cat(
-            vec![
-                model.action_mean(inputs.0.clone()),
-                model.value(critic_view),
-            ],
-            1,
-        ));
+        let out = values(Tensor::cat(vec![mean.clone(), model.value(critic_view)], 1));
         let s = &mut self.storage;
         let mu = RolloutStorage::rows(&mut s.mu, t, n, na);
         let value = RolloutStorage::rows(&mut s.values, t, n, 1);
@@ -203,7 +253,6 @@ impl Ppo {
         if first_non_finite(mu).is_some() || first_non_finite(value).is_some() {
             return Err(RlError::NonFinite("the policy's output".into()));
         }
-        self.step_obs.push(inputs);
         let sigma = &self.sigma;
         // Each env draws from its own stream, so the envs run in parallel with the same result.
         let mu = &s.mu[t * n * na..(t + 1) * n * na];
@@ -221,7 +270,51 @@ impl Ppo {
             });
         RolloutStorage::rows(&mut s.actions, t, n, na).copy_from_slice(actions);
         s.sigma.copy_from_slice(sigma);
+        self.step_tensors.push(StepTensors {
+            obs: actor_input,
+            critic_obs: critic_input,
+            mu: mean,
+            actions: tensor2(parallel::to_vec(actions), n, na, &device),
+        });
         Ok(())
+    }
+
+    /// Rows of the permutation an update of the current storage uses (whole minibatches).
+    fn shuffle_len(&self) -> usize {
+        let mb = self.cfg.num_mini_batches.max(1);
+        self.storage.batch_size() / mb * mb
+    }
+
+    /// Starts drawing the next update's shuffle on a helper thread (it depends only on the
+    /// seed, the update's number and the rollout's size), unless it is already being drawn.
+    fn draw_next_shuffle(&mut self) {
+        let (seed, updates, len) = (self.seed, self.updates, self.shuffle_len());
+        let drawn = |p: &PendingShuffle| p.updates == updates && p.len == len;
+        if len > MAX_ROLLOUT_ROWS || self.next_shuffle.as_ref().is_some_and(drawn) {
+            return;
+        }
+        // Without a thread the update draws it itself.
+        self.next_shuffle = std::thread::Builder::new()
+            .name("orbit-shuffle".into())
+            .spawn(move || shuffle(seed, updates, len))
+            .ok()
+            .map(|handle| PendingShuffle {
+                updates,
+                len,
+                handle,
+            });
+    }
+
+    /// The shuffle of this update: the one drawn during the rollout, or drawn now.
+    fn take_shuffle(&mut self, len: usize) -> Vec<u32> {
+        let updates = self.updates;
+        match self.next_shuffle.take() {
+            Some(p) if p.updates == updates && p.len == len => p
+                .handle
+                .join()
+                .unwrap_or_else(|_| shuffle(self.seed, updates, len)),
+            _ => shuffle(self.seed, updates, len),
+        }
     }
 
     /// Stores the step's rewards and dones; a time-out adds `γ·V(s_t)` to the reward, since
@@ -281,13 +374,14 @@ impl Ppo {
                 cfg.num_mini_batches
             )));
         }
-        // One permutation per update, reused by every epoch (RSL-RL's generator).
-        let mut perm: Vec<usize> = (0..cfg.num_mini_batches * m).collect();
-        let mut rng = EnvRng::new(self.seed, self.updates, streams::SHUFFLE);
-        for i in (1..perm.len()).rev() {
-            let j = ((u64::from(rng.next_u32()) * (i as u64 + 1)) >> 32) as usize;
-            perm.swap(i, j);
+        if b > MAX_ROLLOUT_ROWS {
+            return Err(RlError::EnvMismatch(format!(
+                "a rollout of {b} transitions is more than an update takes ({MAX_ROLLOUT_ROWS}); \
+                 use fewer envs or steps per env"
+            )));
         }
+        // One permutation per update, reused by every epoch (RSL-RL's generator).
+        let perm = self.take_shuffle(cfg.num_mini_batches * m);
         // A failed update leaves the network, the optimiser and the learning rate as they
         // were (tensors are shared, so this copies no weights).
         let before = (
@@ -298,15 +392,20 @@ impl Ppo {
         let mut totals: Option<Tensor<1>> = None;
         let rollout = Minibatch::upload(
             &self.storage,
-            &self.step_obs,
+            &self.step_tensors,
             &perm,
             m,
             cfg.normalize_advantage_per_mini_batch,
             &self.device,
         );
+        // Each minibatch's rows, uploaded once for all epochs.
+        let rows: Vec<Tensor<1, Int>> = perm
+            .chunks_exact(m)
+            .map(|chunk| index_tensor(chunk, &self.device))
+            .collect();
         for _ in 0..cfg.num_learning_epochs {
-            for k in 0..cfg.num_mini_batches {
-                let batch = rollout.select(&perm[k * m..(k + 1) * m], &self.device);
+            for rows in &rows {
+                let batch = rollout.select(rows);
                 let losses = self.step_minibatch(batch);
                 totals = Some(match totals {
                     Some(t) => t + losses,
@@ -339,7 +438,7 @@ impl Ppo {
         // permutation.
         self.updates += 1;
         self.storage.step = 0;
-        self.step_obs.clear();
+        self.step_tensors.clear();
         Ok(LossStats {
             value: value / steps,
             surrogate: surrogate / steps,
@@ -591,46 +690,44 @@ struct Minibatch {
 }
 
 impl Minibatch {
-    /// Uploads the storage, with the observations of its steps given as tensors (`step_obs`,
-    /// actor and critic, one pair per step; no critic tensor where it saw the actor's). With `per_minibatch` the advantages are
-    /// normalised within each minibatch of `perm` (chunks of `m`): the permutation is the same
-    /// in every epoch, so this is done once, here.
+    /// The whole rollout: the tensors of its steps concatenated, the rest of the storage
+    /// uploaded. With `per_minibatch` the advantages are normalised within each minibatch of
+    /// `perm` (chunks of `m`): the permutation is the same in every epoch, so this is done
+    /// once, here.
     fn upload(
         s: &RolloutStorage,
-        step_obs: &[(Tensor<2>, Option<Tensor<2>>)],
-        perm: &[usize],
+        steps: &[StepTensors],
+        perm: &[u32],
         m: usize,
         per_minibatch: bool,
         device: &Device,
     ) -> Self {
-        let b = s.batch_size();
         assert_eq!(
-            step_obs.len(),
+            steps.len(),
             s.num_steps,
-            "the update needs the observations of every step"
+            "the update needs the tensors of every step"
         );
-        let obs = step_obs.iter().map(|(a, _)| a.clone()).collect();
-        let critic_obs = step_obs.iter().any(|(_, c)| c.is_some()).then(|| {
-            let steps = step_obs
-                .iter()
-                .map(|(a, c)| c.clone().unwrap_or_else(|| a.clone()));
-            Tensor::cat(steps.collect(), 0)
-        });
+        let cat =
+            |f: &dyn Fn(&StepTensors) -> Tensor<2>| Tensor::cat(steps.iter().map(f).collect(), 0);
+        let critic_obs = steps
+            .iter()
+            .any(|st| st.critic_obs.is_some())
+            .then(|| cat(&|st| st.critic_obs.clone().unwrap_or_else(|| st.obs.clone())));
         let mut advantages = s.advantages.clone();
         if per_minibatch {
             for chunk in perm.chunks_exact(m) {
-                let mut a: Vec<f32> = chunk.iter().map(|&i| s.advantages[i]).collect();
+                let mut a: Vec<f32> = chunk.iter().map(|&i| s.advantages[i as usize]).collect();
                 storage::normalize(&mut a);
                 for (&i, v) in chunk.iter().zip(a) {
-                    advantages[i] = v;
+                    advantages[i as usize] = v;
                 }
             }
         }
         Self {
-            obs: Tensor::cat(obs, 0),
+            obs: cat(&|st| st.obs.clone()),
             critic_obs,
-            actions: tensor2(s.actions.clone(), b, s.num_actions, device),
-            mu: tensor2(s.mu.clone(), b, s.num_actions, device),
+            actions: cat(&|st| st.actions.clone()),
+            mu: cat(&|st| st.mu.clone()),
             log_prob: tensor1(s.actions_log_prob.clone(), device),
             advantages: tensor1(advantages, device),
             returns: tensor1(s.returns.clone(), device),
@@ -638,23 +735,19 @@ impl Minibatch {
         }
     }
 
-    /// The rows `idx`, in that order.
-    fn select(&self, idx: &[usize], device: &Device) -> Self {
-        let rows = idx.len();
-        let idx: Vec<i64> = idx.iter().map(|&i| i as i64).collect();
-        let idx = Tensor::<1, Int>::from_data(TensorData::new(idx, [rows]), device);
+    /// The rows `idx` (an [`index_tensor`]), in that order.
+    fn select(&self, idx: &Tensor<1, Int>) -> Self {
+        let pick1 = |t: &Tensor<1>| t.clone().select(0, idx.clone());
+        let pick2 = |t: &Tensor<2>| t.clone().select(0, idx.clone());
         Self {
-            obs: self.obs.clone().select(0, idx.clone()),
-            critic_obs: self
-                .critic_obs
-                .as_ref()
-                .map(|c| c.clone().select(0, idx.clone())),
-            actions: self.actions.clone().select(0, idx.clone()),
-            mu: self.mu.clone().select(0, idx.clone()),
-            log_prob: self.log_prob.clone().select(0, idx.clone()),
-            advantages: self.advantages.clone().select(0, idx.clone()),
-            returns: self.returns.clone().select(0, idx.clone()),
-            values: self.values.clone().select(0, idx),
+            obs: pick2(&self.obs),
+            critic_obs: self.critic_obs.as_ref().map(pick2),
+            actions: pick2(&self.actions),
+            mu: pick2(&self.mu),
+            log_prob: pick1(&self.log_prob),
+            advantages: pick1(&self.advantages),
+            returns: pick1(&self.returns),
+            values: pick1(&self.values),
         }
     }
 
@@ -701,9 +794,16 @@ mod tests {
 
     /// The whole rollout as one minibatch.
     fn whole_rollout(p: &Ppo) -> Minibatch {
-        let all: Vec<usize> = (0..p.storage.batch_size()).collect();
-        Minibatch::upload(&p.storage, &p.step_obs, &all, all.len(), false, &p.device)
-            .select(&all, &p.device)
+        let all: Vec<u32> = (0..p.storage.batch_size() as u32).collect();
+        Minibatch::upload(
+            &p.storage,
+            &p.step_tensors,
+            &all,
+            all.len(),
+            false,
+            &p.device,
+        )
+        .select(&index_tensor(&all, &p.device))
     }
 
     /// Fills the storage with a rollout on synthetic observations and rewards; returns the
@@ -748,7 +848,7 @@ mod tests {
         assert_eq!(p.storage.mu, clean.storage.mu);
         assert_eq!(p.storage.values, clean.storage.values);
         assert_eq!(p.storage.actions_log_prob, clean.storage.actions_log_prob);
-        assert_eq!(p.step_obs.len(), 1);
+        assert_eq!(p.step_tensors.len(), 1);
     }
 
     /// Each env samples from its own stream, so the actions and their log-probabilities are
@@ -800,13 +900,17 @@ mod tests {
     fn minibatches_select_their_rows_and_normalise_their_advantages() {
         let mut p = ppo(16, 4);
         let all_obs = rollout(&mut p);
-        let perm: Vec<usize> = (0..64).map(|i| (i * 37) % 64).collect();
-        let r = Minibatch::upload(&p.storage, &p.step_obs, &perm, 16, true, &p.device);
+        let perm: Vec<u32> = (0..64).map(|i| (i * 37) % 64).collect();
+        let r = Minibatch::upload(&p.storage, &p.step_tensors, &perm, 16, true, &p.device);
         for chunk in perm.chunks_exact(16) {
-            let mb = r.select(chunk, &p.device);
-            let obs = values(mb.obs);
+            let mb = r.select(&index_tensor(chunk, &p.device));
+            let (obs, actions, mu) = (values(mb.obs), values(mb.actions), values(mb.mu));
+            let s = &p.storage;
             for (row, &i) in chunk.iter().enumerate() {
+                let i = i as usize;
                 assert_eq!(obs[row * 3..row * 3 + 3], all_obs[i * 3..i * 3 + 3]);
+                assert_eq!(actions[row * 2..row * 2 + 2], s.actions[i * 2..i * 2 + 2]);
+                assert_eq!(mu[row * 2..row * 2 + 2], s.mu[i * 2..i * 2 + 2]);
             }
             let a = values(mb.advantages);
             let mean = a.iter().sum::<f32>() / 16.0;
@@ -816,6 +920,27 @@ mod tests {
                 "{mean} {var}"
             );
         }
+    }
+
+    /// The shuffle drawn on the helper thread during the rollout is a permutation of every
+    /// row, the one the update would draw itself; one of another size is drawn again.
+    #[test]
+    fn the_shuffle_drawn_during_the_rollout_is_the_updates_own() {
+        let mut p = ppo(16, 4);
+        rollout(&mut p);
+        assert!(
+            p.next_shuffle.is_some(),
+            "drawn at the rollout's first step"
+        );
+        let drawn = p.take_shuffle(64);
+        assert_eq!(drawn, shuffle(5, 0, 64));
+        let mut sorted = drawn.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..64).collect::<Vec<u32>>());
+        assert_ne!(drawn, sorted, "shuffled");
+        assert_ne!(shuffle(5, 1, 64), drawn, "each update draws its own");
+        p.draw_next_shuffle();
+        assert_eq!(p.take_shuffle(32), shuffle(5, 0, 32));
     }
 
     /// Stored log-probabilities are those of the sampled actions under N(μ, σ²).

@@ -140,20 +140,33 @@ pub fn gae(
 ) {
     let n = last_values.len();
     let t_max = rewards.len() / n;
-    for (e, &last_value) in last_values.iter().enumerate() {
-        let mut advantage = 0.0f32;
-        for t in (0..t_max).rev() {
-            let i = t * n + e;
-            let next_value = if t == t_max - 1 {
-                last_value
-            } else {
-                values[i + n]
-            };
-            let not_done = 1.0 - dones[i];
-            let delta = rewards[i] + not_done * gamma * next_value - values[i];
-            advantage = delta + not_done * gamma * lam * advantage;
-            returns[i] = advantage + values[i];
-            advantages[i] = advantage;
+    // Backwards over whole steps (contiguous rows, so the inner loop vectorises); `trace`
+    // carries each env's advantage to the step before, with the arithmetic of an env-by-env
+    // loop.
+    let mut trace = vec![0.0f32; n];
+    for t in (0..t_max).rev() {
+        let row = t * n..(t + 1) * n;
+        let next_values = if t == t_max - 1 {
+            last_values
+        } else {
+            &values[(t + 1) * n..(t + 2) * n]
+        };
+        let inputs = rewards[row.clone()]
+            .iter()
+            .zip(&dones[row.clone()])
+            .zip(&values[row.clone()])
+            .zip(next_values);
+        let outputs = returns[row.clone()]
+            .iter_mut()
+            .zip(&mut advantages[row])
+            .zip(&mut trace);
+        for ((((&reward, &done), &value), &next_value), ((ret, adv), trace)) in inputs.zip(outputs)
+        {
+            let not_done = 1.0 - done;
+            let delta = reward + not_done * gamma * next_value - value;
+            *trace = delta + not_done * gamma * lam * *trace;
+            *ret = *trace + value;
+            *adv = *trace;
         }
     }
 }
