@@ -127,6 +127,21 @@ fn index_tensor(idx: &[u32], device: &Device) -> Tensor<1, Int> {
     Tensor::from_data(TensorData::new(idx, [n]), device)
 }
 
+/// The sum of all of `x`'s values as a `[1]` tensor, reduced along one dimension. burn's
+/// whole-tensor `sum` (and `mean`) lets cubecl's autotune choose a kernel whose workgroups add
+/// their partial sums atomically (`sum_one_shot`), in an order that changes from run to run;
+/// it does choose it for the gradient norms' sums on an H100. A reduction along a dimension
+/// gives each output to one workgroup, so the same inputs give the same bits.
+fn sum_all<const D: usize>(x: Tensor<D>) -> Tensor<1> {
+    let n = x.shape().num_elements();
+    x.reshape([n]).sum_dim(0)
+}
+
+/// The mean of `x`'s values as a `[1]` tensor, reduced as in [`sum_all`].
+fn mean_all(x: Tensor<1>) -> Tensor<1> {
+    x.mean_dim(0)
+}
+
 /// A tensor's values, row-major.
 pub(crate) fn values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
     t.into_data()
@@ -467,7 +482,7 @@ impl Ppo {
         let critic_obs = critic_obs.unwrap_or_else(|| obs.clone());
         let mu = self.model.action_mean(obs);
         let sigma = self.model.action_std().reshape([1, na]);
-        let log_sigma_sum = sigma.clone().log().sum();
+        let log_sigma_sum = sum_all(sigma.clone().log());
         // log N(a; μ, σ) summed over actions: −Σ (a−μ)²/(2σ²) − Σ ln σ − A/2·ln 2π.
         let log_prob = (actions - mu.clone())
             .powi_scalar(2)
@@ -490,22 +505,23 @@ impl Ppo {
                 .div(sigma_d.powi_scalar(2).mul_scalar(2.0)))
         .sub_scalar(0.5)
         .sum_dim(1)
-        .mean();
+        .reshape([rows]);
+        let kl = mean_all(kl);
 
         let ratio = (log_prob - old_log_prob).exp();
         let eps = cfg.clip_param;
         let surrogate = advantages.clone().neg().mul(ratio.clone());
         let surrogate_clipped = advantages.neg().mul(ratio.clamp(1.0 - eps, 1.0 + eps));
-        let surrogate = surrogate.max_pair(surrogate_clipped).mean();
+        let surrogate = mean_all(surrogate.max_pair(surrogate_clipped));
 
         let value = self.model.value(critic_obs).reshape([rows]);
         let value = if cfg.use_clipped_value_loss {
             let clipped = old_values.clone() + (value.clone() - old_values).clamp(-eps, eps);
             let a = (value - returns.clone()).powi_scalar(2);
             let b = (clipped - returns).powi_scalar(2);
-            a.max_pair(b).mean()
+            mean_all(a.max_pair(b))
         } else {
-            (returns - value).powi_scalar(2).mean()
+            mean_all((returns - value).powi_scalar(2))
         };
         MinibatchLosses {
             kl,
@@ -597,7 +613,7 @@ fn grad_norm_squared<M: Module>(module: &M, grads: &GradientsParams) -> Tensor<1
     impl ModuleVisitor for SquaredNorm<'_> {
         fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
             if let Some(g) = self.grads.get::<D>(param.id) {
-                let s = g.powi_scalar(2).sum();
+                let s = sum_all(g.powi_scalar(2));
                 self.total = Some(match self.total.take() {
                     Some(t) => t + s,
                     None => s,
