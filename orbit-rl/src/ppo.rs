@@ -89,7 +89,7 @@ struct PendingShuffle {
 
 /// The permutation of `0..len` that update number `update` uses in every epoch: a
 /// Fisher–Yates shuffle drawn from the `(seed, update, SHUFFLE)` stream. Serial (each swap
-/// depends on the last), so the runner draws it while the rollout is collected.
+/// depends on the last), so it is drawn on a helper thread while the rollout is collected.
 fn shuffle(seed: u64, update: u32, len: usize) -> Vec<u32> {
     let mut perm: Vec<u32> = (0..len)
         .map(|i| u32::try_from(i).expect("the update checks the rollout's size"))
