@@ -283,7 +283,6 @@ impl Ppo {
                 }
                 *log_prob = gaussian_log_prob(a, m, sigma);
             });
-        RolloutStorage::rows(&mut s.actions, t, n, na).copy_from_slice(actions);
         s.sigma.copy_from_slice(sigma);
         self.step_tensors.push(StepTensors {
             obs: actor_input,
@@ -396,7 +395,7 @@ impl Ppo {
             )));
         }
         // One permutation per update, reused by every epoch (RSL-RL's generator).
-        let perm = self.take_shuffle(cfg.num_mini_batches * m);
+        let perm = self.take_shuffle(self.shuffle_len());
         // A failed update leaves the network, the optimiser and the learning rate as they
         // were (tensors are shared, so this copies no weights).
         let before = (
@@ -823,22 +822,23 @@ mod tests {
     }
 
     /// Fills the storage with a rollout on synthetic observations and rewards; returns the
-    /// observations, step after step.
-    fn rollout(p: &mut Ppo) -> Vec<f32> {
+    /// observations and the sampled actions, step after step.
+    fn rollout(p: &mut Ppo) -> (Vec<f32>, Vec<f32>) {
         let (n, t) = (p.storage.num_envs, p.storage.num_steps);
         let mut rng = EnvRng::new(1, 0, 99);
         let mut actions = vec![0.0; n * 2];
-        let mut all_obs = Vec::new();
+        let (mut all_obs, mut all_actions) = (Vec::new(), Vec::new());
         for _ in 0..t {
             let obs: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
             p.act(&obs, &obs, &mut actions).unwrap();
             all_obs.extend_from_slice(&obs);
+            all_actions.extend_from_slice(&actions);
             let rewards: Vec<f32> = actions.chunks(2).map(|a| -a[0] * a[0]).collect();
             p.process_env_step(&rewards, &vec![false; n], &vec![false; n]);
         }
         let last: Vec<f32> = (0..n * 3).map(|_| rng.uniform_range(-1.0, 1.0)).collect();
         p.compute_returns(&last);
-        all_obs
+        (all_obs, all_actions)
     }
 
     /// A step rejected for a non-finite policy output stores nothing that counts: taking it
@@ -915,7 +915,7 @@ mod tests {
     #[test]
     fn minibatches_select_their_rows_and_normalise_their_advantages() {
         let mut p = ppo(16, 4);
-        let all_obs = rollout(&mut p);
+        let (all_obs, all_actions) = rollout(&mut p);
         let perm: Vec<u32> = (0..64).map(|i| (i * 37) % 64).collect();
         let r = Minibatch::upload(&p.storage, &p.step_tensors, &perm, 16, true, &p.device);
         for chunk in perm.chunks_exact(16) {
@@ -925,7 +925,7 @@ mod tests {
             for (row, &i) in chunk.iter().enumerate() {
                 let i = i as usize;
                 assert_eq!(obs[row * 3..row * 3 + 3], all_obs[i * 3..i * 3 + 3]);
-                assert_eq!(actions[row * 2..row * 2 + 2], s.actions[i * 2..i * 2 + 2]);
+                assert_eq!(actions[row * 2..row * 2 + 2], all_actions[i * 2..i * 2 + 2]);
                 assert_eq!(mu[row * 2..row * 2 + 2], s.mu[i * 2..i * 2 + 2]);
             }
             let a = values(mb.advantages);

@@ -13,8 +13,6 @@ pub struct RolloutStorage {
     pub num_critic_obs: usize,
     /// Action width.
     pub num_actions: usize,
-    /// Sampled actions.
-    pub actions: Vec<f32>,
     /// Rewards (with the time-out bootstrap added).
     pub rewards: Vec<f32>,
     /// 1 where the episode ended (terminated or timed out) after the step.
@@ -75,7 +73,6 @@ impl RolloutStorage {
             num_obs,
             num_critic_obs,
             num_actions,
-            actions: vec![0.0; b * num_actions],
             rewards: vec![0.0; b],
             dones: vec![0.0; b],
             values: vec![0.0; b],
