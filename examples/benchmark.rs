@@ -47,9 +47,12 @@ struct Args {
     /// Velocity-solver iterations per physics step (0: the backend's default).
     #[arg(long, default_value_t = 0)]
     solver_iterations: usize,
-    /// Task used for the full-env column.
-    #[arg(long, default_value = "BoxPushing-Torque-Franka-v0")]
-    task: String,
+    /// Task used for the full-env column (default: BoxPushing-Torque-Franka-v0).
+    #[arg(long)]
+    task: Option<String>,
+    /// Env config file of the full-env column, used instead of the task's.
+    #[arg(long)]
+    task_config: Option<std::path::PathBuf>,
     /// Scene config overrides `key.path=value`.
     #[arg(long = "set")]
     overrides: Vec<String>,
@@ -99,7 +102,11 @@ fn full_env(args: &Args, n: usize) -> Result<FullEnv, Box<dyn std::error::Error>
     overrides.push(format!("sim.solver_iterations={}", args.solver_iterations));
     overrides.push(format!("decimation={}", args.decimation));
     overrides.extend(args.env_overrides.iter().cloned());
-    let mut env = orbit::make(&args.task, &overrides)?;
+    let (mut env, _) = orbit::make_env(
+        args.task.as_deref(),
+        args.task_config.as_deref(),
+        &overrides,
+    )?;
     env.reset()?;
     if args.staggered {
         let max = env.max_episode_length();

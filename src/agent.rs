@@ -7,10 +7,10 @@ use orbit_core::rng::{EnvRng, streams};
 /// Isaac Lab's agent-script flags.
 #[derive(Parser, Debug)]
 pub struct AgentArgs {
-    /// Task id (see the `list_tasks` example).
-    #[arg(long, default_value = "BoxPushing-Torque-Franka-v0")]
-    pub task: String,
-    /// Envs, seed, backend.
+    /// Task id (see the `list_tasks` example; default: BoxPushing-Torque-Franka-v0).
+    #[arg(long)]
+    pub task: Option<String>,
+    /// Env config file, envs, seed, backend.
     #[command(flatten)]
     pub env: crate::EnvArgs,
     /// Env steps to run.
@@ -26,7 +26,8 @@ pub struct AgentArgs {
 pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error>> {
     let e = &args.env;
     let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &args.overrides);
-    let mut env = crate::make(&args.task, &overrides)?;
+    let (mut env, name) =
+        crate::make_env(args.task.as_deref(), e.task_config.as_deref(), &overrides)?;
     env.reset()?;
     let (n, d) = (env.num_envs(), env.action_dim());
     let mut rng = EnvRng::new(e.seed.unwrap_or(0), 0, streams::POLICY);
@@ -48,7 +49,7 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
     let secs = start.elapsed().as_secs_f64();
     println!(
         "{}: {n} envs × {} steps in {secs:.2} s ({:.0} env-steps/s), mean reward per step {:.4}",
-        args.task,
+        name,
         args.steps,
         (n * args.steps) as f64 / secs,
         mean_reward / args.steps as f64

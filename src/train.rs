@@ -11,21 +11,30 @@ use orbit_rl::burn::tensor::Device;
 use orbit_rl::run_dir::{
     ENV_CONFIG_FILE, PARAMS_DIR, checkpoint_env_config, new_run_dir, resolve_checkpoint,
 };
-use orbit_rl::{OnPolicyRunner, Policy, RlError, RunnerCfg, VecEnv};
 
-/// The learning library whose configs `train` reads (`AgentCfgDef::library`).
-const LIBRARY: &str = "rsl_rl";
+/// The training config in a run's `params/` (`--agent-config` takes it back).
+pub const AGENT_CONFIG_FILE: &str = "agent.ron";
+/// The black-box config in a run's `params/` (`--bb-config` takes it back).
+pub const BLACK_BOX_CONFIG_FILE: &str = "black_box.ron";
+use orbit_rl::{OnPolicyRunner, Policy, RlError, RunnerCfg, VecEnv};
 
 /// Flags of `train` (Isaac Lab's names).
 #[derive(Parser, Debug, Clone)]
 pub struct TrainArgs {
-    /// Task id (see the `list_tasks` example).
-    #[arg(long, default_value = "BoxPushing-JointPos-Franka-v0")]
-    pub task: String,
-    /// Envs (default: the agent config's, else the task's), seed of the learner and the env
-    /// (default: the agent config's), physics backend.
+    /// Task id (see the `list_tasks` example; default: BoxPushing-JointPos-Franka-v0).
+    #[arg(long)]
+    pub task: Option<String>,
+    /// Env config file, envs (default: the agent config's, else the task's), seed of the
+    /// learner and the env (default: the agent config's), physics backend.
     #[command(flatten)]
     pub env: crate::EnvArgs,
+    /// Training config file used instead of the task's (RON, as `params/agent.ron` of a run).
+    #[arg(long)]
+    pub agent_config: Option<PathBuf>,
+    /// Black-box wrapper config file used instead of the task's (makes the run episodic: one
+    /// movement primitive per episode).
+    #[arg(long)]
+    pub bb_config: Option<PathBuf>,
     /// Device of the learner: `cpu` or `gpu` (default: the agent config's `device`).
     #[arg(long, value_parser = ["cpu", "gpu"])]
     pub rl_device: Option<String>,
@@ -66,10 +75,19 @@ pub struct TrainArgs {
 /// Flags of `play`.
 #[derive(Parser, Debug, Clone)]
 pub struct PlayArgs {
-    /// Task id.
-    #[arg(long, default_value = "BoxPushing-JointPos-Franka-v0")]
-    pub task: String,
-    /// Envs (default: the task's), seed and physics backend of the env.
+    /// Task id (default: BoxPushing-JointPos-Franka-v0).
+    #[arg(long)]
+    pub task: Option<String>,
+    /// Training config file whose experiment holds the runs (default: the task's); only used
+    /// to find the newest checkpoint when `--checkpoint` is not given.
+    #[arg(long)]
+    pub agent_config: Option<PathBuf>,
+    /// Black-box wrapper config file used instead of the task's (makes the run episodic: one
+    /// movement primitive per episode).
+    #[arg(long)]
+    pub bb_config: Option<PathBuf>,
+    /// Env config file (default: the task's), envs (default: the env config's), seed and
+    /// physics backend of the env.
     #[command(flatten)]
     pub env: crate::EnvArgs,
     /// A checkpoint path (`…/model_<it>`, with or without extension); default: the newest run's
@@ -94,6 +112,8 @@ pub struct PlayArgs {
 
 /// The resolved configs of a run.
 pub struct ResolvedRun {
+    /// The run's config files.
+    pub configs: crate::RunConfigs,
     /// The runner config.
     pub agent: RunnerCfg,
     /// The agent config document (for `params/agent.ron`).
@@ -132,18 +152,16 @@ fn split_overrides(tokens: &[String]) -> Overrides {
 /// user's, then `num_envs`, the seed (the agent's, as Isaac Lab's script copies it) and the
 /// backend.
 pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
-    crate::link_registrations();
-    let def = orbit_managers::agent_cfg(&args.task, LIBRARY).ok_or_else(|| {
-        RlError::EnvMismatch(format!(
-            "task `{}` has no `{LIBRARY}` training config; tasks with one: {:?}",
-            args.task,
-            orbit_managers::tasks()
-                .iter()
-                .filter(|t| orbit_managers::agent_cfg(t.id, LIBRARY).is_some())
-                .map(|t| t.id)
-                .collect::<Vec<_>>()
-        ))
-    })?;
+    let e = &args.env;
+    let configs = crate::RunConfigs::resolve(
+        args.task.as_deref(),
+        crate::DEFAULT_TASK,
+        e.task_config.as_deref(),
+        args.agent_config.as_deref(),
+        args.bb_config.as_deref(),
+    )
+    .map_err(|err| RlError::EnvMismatch(err.to_string()))?;
+    let agent_file = agent_file(&configs)?;
     let Overrides {
         env: user_env,
         agent: mut agent_overrides,
@@ -165,10 +183,10 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     if let Some(r) = &args.run_name {
         agent_overrides.push(format!("run_name={r:?}"));
     }
-    let agent_doc =
-        orbit_core::config::parse_document(def.config, def.file_name, &agent_overrides)?;
-    let agent: RunnerCfg = orbit_core::config::from_node(&agent_doc)?;
-    agent.validate(def.file_name)?;
+    let agent_doc = orbit_managers::load_config(&agent_file, &agent_overrides)
+        .map_err(|err| RlError::EnvMismatch(err.to_string()))?;
+    let agent: RunnerCfg = orbit_core::config::from_overridden_node(&agent_doc, &agent_overrides)?;
+    agent.validate(&agent_file.display().to_string())?;
     let mut env_overrides = agent.env_overrides.clone();
     env_overrides.extend(user_env);
     env_overrides.extend(crate::run_overrides(
@@ -178,6 +196,7 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         &[],
     ));
     Ok(ResolvedRun {
+        configs,
         agent,
         agent_doc,
         env_overrides,
@@ -185,25 +204,36 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     })
 }
 
-/// Writes `params/env.ron`, `params/agent.ron` and, for a black-box task,
-/// `params/black_box.ron` into the run directory.
-fn write_params(
-    dir: &Path,
-    task: &str,
-    run: &ResolvedRun,
-) -> Result<(), Box<dyn std::error::Error>> {
+/// The training config of a run, or an error naming the trainable tasks.
+fn agent_file(configs: &crate::RunConfigs) -> Result<PathBuf, RlError> {
+    configs.agent.clone().ok_or_else(|| {
+        RlError::EnvMismatch(format!(
+            "`{}` has no training config: pass one with --agent-config FILE, or train a task \
+             that has one: {:?}",
+            configs.name,
+            orbit_managers::tasks()
+                .iter()
+                .filter(|t| t.agent.is_some())
+                .map(|t| t.id)
+                .collect::<Vec<_>>()
+        ))
+    })
+}
+
+/// Writes the run's resolved configs into `<dir>/params/`: `env.ron`, `agent.ron` and, for a
+/// black-box run, `black_box.ron`, each a self-contained file (includes merged, overrides
+/// applied) that `--task-config`, `--agent-config` and `--bb-config` take back.
+fn write_params(dir: &Path, run: &ResolvedRun) -> Result<(), Box<dyn std::error::Error>> {
     let params = dir.join(PARAMS_DIR);
     std::fs::create_dir_all(&params).map_err(RlError::io(&params))?;
-    let (t, all) = orbit_managers::resolve_task(task, &run.env_overrides)?;
-    let env_doc = orbit_core::config::parse_document(t.config, t.file_name, &all)?;
+    let env_doc = orbit_managers::load_env_config(&run.configs.env, &run.env_overrides)?;
     let mut files = vec![
         (ENV_CONFIG_FILE, env_doc.to_ron()),
-        ("agent.ron", run.agent_doc.to_ron()),
+        (AGENT_CONFIG_FILE, run.agent_doc.to_ron()),
     ];
-    if let Some(bb) = orbit_managers::black_box_task(task) {
-        let overrides = bb.overrides_with(&run.black_box_overrides);
-        let doc = orbit_core::config::parse_document(bb.config, bb.file_name, &overrides)?;
-        files.push(("black_box.ron", doc.to_ron()));
+    if let Some(bb) = &run.configs.black_box {
+        let doc = orbit_managers::load_config(bb, &run.black_box_overrides)?;
+        files.push((BLACK_BOX_CONFIG_FILE, doc.to_ron()));
     }
     for (name, text) in files {
         let path = params.join(name);
@@ -230,21 +260,21 @@ pub fn train(
         None
     };
     std::fs::create_dir_all(&dir).map_err(RlError::io(&dir))?;
-    write_params(&dir, &args.task, &run)?;
+    write_params(&dir, &run)?;
     let video = args.video.video.then(|| VideoCfg {
         dir: dir.join("videos").join("train"),
         length: args.video.video_length,
         interval: Some(args.video_interval),
     });
     let (vec_env, _) = crate::make_vec_env(
-        &args.task,
+        &run.configs,
         &run.env_overrides,
         &run.black_box_overrides,
         video,
     )?;
     println!(
         "{}: {} envs × {} steps per iteration, {} iterations; run directory {}",
-        args.task,
+        run.configs.name,
         vec_env.num_envs(),
         cfg.num_steps_per_env,
         cfg.max_iterations,
@@ -315,18 +345,20 @@ impl EpisodeSummary {
 /// Replays a trained policy (mean actions), prints each finished episode's return and the
 /// step's episode metrics, then the mean return and metrics over all played episodes.
 pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
-    crate::link_registrations();
     let overrides = split_overrides(&args.overrides);
+    let configs = crate::RunConfigs::resolve(
+        args.task.as_deref(),
+        crate::DEFAULT_TASK,
+        args.env.task_config.as_deref(),
+        args.agent_config.as_deref(),
+        args.bb_config.as_deref(),
+    )?;
     let base = match &args.checkpoint {
         Some(p) => p.with_extension(""),
         None => {
-            let def = orbit_managers::agent_cfg(&args.task, LIBRARY).ok_or_else(|| {
-                RlError::EnvMismatch(format!(
-                    "task `{}` has no training config; pass --checkpoint",
-                    args.task
-                ))
-            })?;
-            let agent = RunnerCfg::from_ron(def.config, def.file_name, &[])?;
+            let file = agent_file(&configs)?;
+            let doc = orbit_managers::load_config(&file, &[])?;
+            let agent: RunnerCfg = orbit_core::config::from_node(&doc)?;
             resolve_checkpoint(
                 &args.log_root.join(&agent.experiment_name),
                 &args.load_run,
@@ -348,7 +380,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     });
     let video_dir = video.as_ref().map(|v| v.dir.clone());
     let (mut env, video_progress) =
-        crate::make_vec_env(&args.task, &env_overrides, &overrides.black_box, video)?;
+        crate::make_vec_env(&configs, &env_overrides, &overrides.black_box, video)?;
     // Like Isaac Lab's play, keep going until the video is complete.
     let video_frames = args.video.video_length as u64;
     let video_due = || {
@@ -367,7 +399,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         ))
         .into());
     }
-    println!("playing {} with {}", args.task, base.display());
+    println!("playing {} with {}", configs.name, base.display());
     let n = env.num_envs();
     let mut returns = vec![0.0f32; n];
     let mut finished = vec![0usize; n];

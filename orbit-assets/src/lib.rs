@@ -4,23 +4,31 @@
 //! - [`model_from_urdf_str`] / [`model_from_urdf_file`]: URDF import (revolute, continuous,
 //!   prismatic and fixed joints; primitive collision shapes; full inertia tensors). Every
 //!   problem in a file is reported as an [`AssetError`] naming the file and the element.
+//! - [`asset_cfg`] / [`AssetCfgDef`]: asset configs registered by name (Isaac Lab's
+//!   `FRANKA_PANDA_CFG`): `franka_panda_rod`, `push_box`, `lab_table`, `franka_mount`; scenes
+//!   compose them by name ([`compose_scene`]).
 //! - [`bundled`] / [`bundled_names`]: files compiled into the crate: the Franka Panda with the
-//!   Fancy Gym push rod (`franka_panda_rod.urdf`) and the box-pushing scene
-//!   (`box_pushing_scene.ron`).
-//! - [`box_pushing_scene_cfg`]: the bundled scene as an [`orbit_core::scene::SceneCfg`], with
+//!   Fancy Gym push rod (`franka_panda_rod.urdf`) and Fancy Gym's box-pushing scene
+//!   (`scenes/box_pushing.ron`).
+//! - [`box_pushing_scene_cfg`]: that scene as an [`orbit_core::scene::SceneCfg`], with
 //!   command-line style overrides.
 //! - [`load_model`] / [`model_loader`]: resolve an [`orbit_core::scene::AssetSource`] against
 //!   the file system and the bundled assets.
 
 #![warn(missing_docs)]
 
+mod asset_cfg;
 mod bundled;
+mod compose;
 mod error;
 mod urdf;
 
+pub use asset_cfg::{AssetCfgDef, AssetKind, asset_cfg, asset_cfgs};
 pub use bundled::{
-    box_pushing_scene, box_pushing_scene_cfg, bundled, bundled_names, bundled_scene, load_model,
-    load_scene, model_loader,
+    box_pushing_scene, box_pushing_scene_cfg, bundled, bundled_names, load_model, load_scene,
+    model_loader, resolve_scene,
 };
+pub use compose::{compose_env_scene, compose_scene};
 pub use error::AssetError;
+pub use inventory;
 pub use urdf::{model_from_urdf_file, model_from_urdf_str};

@@ -1,12 +1,13 @@
 //! The bundled Franka (`franka_panda_rod.urdf`) and box-pushing scene against the MuJoCo
-//! reference data in `tests/data/franka_reference.json` (copied from
-//! `shared/spec/franka_box_pushing_params.json`).
+//! reference data in `tests/data/franka_reference.json` (Fancy Gym's `panda_rod.xml` and
+//! `push_box.xml` compiled with MuJoCo 2.3.3; the same numbers as
+//! `tools/franka_box_pushing_params.json`).
 
 use glam::{Quat, Vec3};
-use orbit_assets::{box_pushing_scene_cfg, bundled, load_model, model_loader};
+use orbit_assets::{asset_cfg, asset_cfgs, box_pushing_scene_cfg, load_model, model_loader};
 use orbit_core::kinematics::ArticulationKinematics;
 use orbit_core::math::{Pose, quat_wxyz};
-use orbit_core::scene::{ArticulationModel, AssetSource, Geometry, JointKind, SceneCfg, Shape};
+use orbit_core::scene::{ArticulationModel, AssetSource, Geometry, JointKind, Shape};
 use serde_json::Value;
 
 fn reference() -> Value {
@@ -287,14 +288,30 @@ fn collision_primitives_fit_the_hulls() {
     }
 }
 
-/// The bundled scene is standard RON and reads the same through `orbit_core::config`; overrides
-/// apply.
+/// The bundled scene is its registered asset configs under the scene's names, in the scene's
+/// order; overrides apply to the composed scene.
 #[test]
-fn bundled_scene_parses() {
-    let text = bundled("box_pushing_scene.ron").unwrap();
-    let plain: SceneCfg = ron::from_str(text).expect("scene is standard RON");
+fn bundled_scene_is_composed_of_the_asset_configs() {
+    fn asset<T: serde::de::DeserializeOwned>(asset: &str, name: &str) -> T {
+        let def = asset_cfg(asset).unwrap_or_else(|| panic!("`{asset}` is registered"));
+        orbit_core::config::from_str(def.config, def.file, &[format!("name={name:?}")]).unwrap()
+    }
     let cfg = box_pushing_scene_cfg(&[]).expect("scene loads through orbit_core::config");
-    assert_eq!(plain, cfg);
+    assert_eq!(cfg.env_spacing, 2.5);
+    assert_eq!(cfg.articulations, [asset("franka_panda_rod", "robot")]);
+    assert_eq!(cfg.rigid_objects, [asset("push_box", "box")]);
+    assert_eq!(
+        cfg.static_objects,
+        [
+            asset("lab_table", "table"),
+            asset("franka_mount", "robot_mount")
+        ]
+    );
+    let names: Vec<&str> = asset_cfgs().iter().map(|a| a.name).collect();
+    assert_eq!(
+        names,
+        ["franka_mount", "franka_panda_rod", "lab_table", "push_box"]
+    );
     let changed =
         box_pushing_scene_cfg(&["articulations[0].actuators.arm.stiffness=400.0".into()]).unwrap();
     assert_eq!(

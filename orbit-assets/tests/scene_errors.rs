@@ -21,7 +21,7 @@ fn the_bundled_scene_resolves() {
 #[test]
 fn a_joint_regex_matching_nothing_names_file_field_and_joints() {
     let e = error_of(&[r#"articulations[0].actuators.arm.joint_names_expr=["panda_joint9"]"#]);
-    assert!(e.contains("box_pushing_scene.ron"), "{e}");
+    assert!(e.contains("scenes/box_pushing.ron"), "{e}");
     assert!(e.contains("actuators.arm.joint_names_expr"), "{e}");
     assert!(e.contains("`panda_joint9` matches no joint"), "{e}");
     assert!(

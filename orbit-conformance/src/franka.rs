@@ -204,7 +204,7 @@ pub fn franka_tracks_mujoco_rollouts_with(sim: &orbit_core::physics::SimCfg, pro
     }
 }
 
-/// Replays the MuJoCo reference rollouts (`shared/reference/mujoco_box_pushing_rollouts.json`)
+/// Replays the MuJoCo reference rollouts (`data/mujoco_box_pushing_rollouts.json`)
 /// with Fancy Gym's torque law `τ = clip(10 clip(a, −1, 1) + bias, ±τ_max)`, the action either
 /// recorded (`normalized_torque`) or recomputed by the ProMP PD controller from the current state
 /// (`promp_pd`), all cases side by side as envs of one backend. Returns the agreement per case.

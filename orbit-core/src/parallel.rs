@@ -11,7 +11,7 @@
 pub const MIN_ENVS_PER_TASK: usize = 512;
 
 /// Envs per parallel task for loops that only copy or scale a few values per env. Waking the
-/// pool's threads costs about 0.1 ms on the H100 machine's host, more than such a loop over
+/// pool's threads costs about 0.1 ms on an H100 GPU machine's host, more than such a loop over
 /// 4 096 envs takes on one thread, so only batches of tens of thousands of envs split.
 pub const MIN_ENVS_PER_COPY_TASK: usize = 1 << 14;
 

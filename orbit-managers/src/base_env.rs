@@ -173,6 +173,7 @@ pub struct ManagerBasedEnv {
 impl ManagerBasedEnv {
     /// Builds the env from a config document (see [`EnvCfg`]).
     pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
+        let doc = &orbit_assets::compose_env_scene(doc)?;
         let cfg: EnvCfg = orbit_core::config::from_node(doc)?;
         let mut env = Self::build(doc, cfg, u32::MAX)?;
         env.apply_startup_events()?;
@@ -198,7 +199,8 @@ impl ManagerBasedEnv {
                 message: "expected at least 1 physics step per env step".into(),
             });
         }
-        let desc = orbit_assets::bundled_scene(&cfg.scene.bundled, &cfg.scene.overrides)?;
+        let file = doc.span.file.display().to_string();
+        let desc = orbit_assets::resolve_scene(&cfg.scene, &file, None)?;
         let backend = build_backend(&desc, cfg.num_envs, &cfg.sim)?;
         let scene = Scene::new(backend, desc);
         let n = scene.num_envs();

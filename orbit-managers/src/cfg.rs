@@ -6,7 +6,7 @@
 use std::marker::PhantomData;
 
 use orbit_core::physics::SimCfg;
-use orbit_core::scene::ViewerCfg;
+use orbit_core::scene::{SceneCfg, ViewerCfg};
 use serde::de::{Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
@@ -38,17 +38,6 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Terms<T> {
         }
         d.deserialize_map(V(PhantomData))
     }
-}
-
-/// Where the scene comes from: a bundled scene config plus overrides of its fields.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SceneSource {
-    /// A bundled scene config (`orbit_assets::bundled`), e.g. `"box_pushing_scene.ron"`.
-    pub bundled: String,
-    /// Overrides applied to the scene config (`articulations[0].actuators.arm.stiffness=400.0`).
-    #[serde(default)]
-    pub overrides: Vec<String>,
 }
 
 /// A term that is a function called with typed parameters.
@@ -199,8 +188,10 @@ pub struct EnvCfg {
     /// Physics settings, including the backend name.
     #[serde(default)]
     pub sim: SimCfg,
-    /// The scene.
-    pub scene: SceneSource,
+    /// The scene: its entities by name, each from a registered asset config
+    /// (`"robot": (asset: "franka_panda_rod", …)`, see `orbit_assets::compose_scene`) or
+    /// given whole.
+    pub scene: SceneCfg,
     /// Action terms (concatenated in order).
     pub actions: Terms<FuncTermCfg>,
     /// Observation groups.
@@ -234,8 +225,10 @@ pub struct RlEnvCfg {
     /// Physics settings, including the backend name.
     #[serde(default)]
     pub sim: SimCfg,
-    /// The scene.
-    pub scene: SceneSource,
+    /// The scene: its entities by name, each from a registered asset config
+    /// (`"robot": (asset: "franka_panda_rod", …)`, see `orbit_assets::compose_scene`) or
+    /// given whole.
+    pub scene: SceneCfg,
     /// Action terms (concatenated in order).
     pub actions: Terms<FuncTermCfg>,
     /// Observation groups.

@@ -24,6 +24,6 @@ pub use error::EnvError;
 pub use rl_env::{Extras, ManagerBasedRlEnv, StepObserver, StepResult};
 pub use scene::Scene;
 pub use task::{
-    AgentCfgDef, BlackBoxTaskDef, TaskDef, agent_cfg, black_box_task, black_box_tasks, make,
-    resolve_task, tasks,
+    Task, TaskDef, TaskTable, bundled_configs, export_task_configs, load_config, load_env_config,
+    make, make_from_file, task, tasks,
 };

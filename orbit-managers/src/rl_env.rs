@@ -66,6 +66,7 @@ pub struct StepResult<'a> {
 impl ManagerBasedRlEnv {
     /// Builds the env from a config document (see [`RlEnvCfg`]).
     pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
+        let doc = &orbit_assets::compose_env_scene(doc)?;
         let cfg: RlEnvCfg = orbit_core::config::from_node(doc)?;
         if !(cfg.episode_length_s.is_finite() && cfg.episode_length_s > 0.0) {
             return Err(EnvError::InvalidTerm {

@@ -1,140 +1,218 @@
-//! The task registry: task ids (`BoxPushing-Torque-Franka-v0`) mapped to their RON configs.
+//! The task registry: a table of task ids and their config files (env, training agent,
+//! black-box wrapper), as Isaac Lab's `gym.register(id, kwargs={"env_cfg_entry_point": …,
+//! "rsl_rl_cfg_entry_point": …})`.
+//!
+//! A task crate bundles its `config/` files and registers its table:
+//!
+//! ```ignore
+//! inventory::submit! {
+//!     orbit_managers::TaskTable {
+//!         root: "reach",
+//!         files: orbit_managers::config_files!("env/reach.ron", "agents/ppo.ron"),
+//!         tasks: &[orbit_managers::TaskDef {
+//!             id: "Reach-Franka-v0",
+//!             description: "…",
+//!             env: "env/reach.ron",
+//!             agent: Some("agents/ppo.ron"),
+//!             black_box: None,
+//!         }],
+//!     }
+//! }
+//! ```
+//!
+//! The files are compiled in and named `<bundled>/<root>/<path>`; their `#include`s resolve
+//! relative to the including file, in memory, as they do on disk.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use orbit_core::config::{Bundled, Node};
 
 use crate::error::EnvError;
 use crate::rl_env::ManagerBasedRlEnv;
 
-/// A registered task:
-/// `inventory::submit! { TaskDef { id, description, file_name, config, overrides } }`.
+/// One row of a task table; paths are relative to the table's `config/` directory.
 pub struct TaskDef {
     /// Task id.
     pub id: &'static str,
     /// One-line description.
     pub description: &'static str,
-    /// File name used in error messages.
-    pub file_name: &'static str,
-    /// The env config (RON text).
-    pub config: &'static str,
-    /// Overrides that turn the config into this variant (applied before the user's).
-    pub overrides: &'static [&'static str],
+    /// The env config (for a black-box task, the step-based env it wraps).
+    pub env: &'static str,
+    /// The training config of `train` (RSL-RL's PPO, or BBRL-PPO for a black-box task).
+    pub agent: Option<&'static str>,
+    /// The black-box wrapper config: set for episodic tasks, one movement primitive per
+    /// episode (Fancy Gym's `fancy_ProMP/…` ids).
+    pub black_box: Option<&'static str>,
 }
 
-inventory::collect!(TaskDef);
+/// A crate's bundled config files and its tasks:
+/// `inventory::submit! { TaskTable { root, files, tasks } }`.
+pub struct TaskTable {
+    /// The directory name of the crate's files under the bundled root (`box_pushing`).
+    pub root: &'static str,
+    /// `(path under config/, text)` of every file, from [`config_files!`](crate::config_files).
+    pub files: &'static [(&'static str, &'static str)],
+    /// The registered tasks.
+    pub tasks: &'static [TaskDef],
+}
 
-/// A registered black-box (episodic) task: a step-based task driven by movement primitives
-/// (Fancy Gym's `fancy_ProMP/…` ids): `inventory::submit! { BlackBoxTaskDef { … } }`. The
-/// config is the black-box wrapper's (`orbit_rl::BlackBoxCfg`).
-pub struct BlackBoxTaskDef {
+inventory::collect!(TaskTable);
+
+/// `(path, text)` pairs of files in the calling crate's `config/` directory, compiled in.
+#[macro_export]
+macro_rules! config_files {
+    ($($file:literal),* $(,)?) => {
+        &[$(($file, include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/config/", $file)))),*]
+    };
+}
+
+/// A registered task with its files' full names (`<bundled>/box_pushing/env/torque.ron`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Task {
     /// Task id.
     pub id: &'static str,
     /// One-line description.
     pub description: &'static str,
-    /// The step-based task it wraps.
-    pub env_task: &'static str,
-    /// Overrides of the step-based task's config (applied before the user's).
-    pub env_overrides: &'static [&'static str],
-    /// File name used in error messages.
-    pub file_name: &'static str,
-    /// The black-box config (RON text).
-    pub config: &'static str,
-    /// Overrides that turn the black-box config into this variant (applied before the
-    /// user's).
-    pub overrides: &'static [&'static str],
+    /// The env config.
+    pub env: PathBuf,
+    /// The training config, if the task is trainable.
+    pub agent: Option<PathBuf>,
+    /// The black-box wrapper config of an episodic task.
+    pub black_box: Option<PathBuf>,
 }
 
-impl BlackBoxTaskDef {
-    /// The task's black-box overrides followed by `user`.
-    pub fn overrides_with(&self, user: &[String]) -> Vec<String> {
-        self.overrides
-            .iter()
-            .map(|s| s.to_string())
-            .chain(user.iter().cloned())
-            .collect()
+impl Task {
+    /// Whether the task is episodic (a movement primitive per episode).
+    pub fn is_black_box(&self) -> bool {
+        self.black_box.is_some()
+    }
+
+    fn new(root: &str, def: &'static TaskDef) -> Self {
+        let full = |path: &str| Bundled::full_path(&format!("{root}/{path}"));
+        Self {
+            id: def.id,
+            description: def.description,
+            env: full(def.env),
+            agent: def.agent.map(full),
+            black_box: def.black_box.map(full),
+        }
     }
 }
 
-inventory::collect!(BlackBoxTaskDef);
-
-/// All registered black-box tasks, sorted by id.
-pub fn black_box_tasks() -> Vec<&'static BlackBoxTaskDef> {
-    let mut v: Vec<&BlackBoxTaskDef> = inventory::iter::<BlackBoxTaskDef>.into_iter().collect();
+/// All registered tasks, sorted by id.
+pub fn tasks() -> Vec<Task> {
+    let mut v: Vec<Task> = inventory::iter::<TaskTable>
+        .into_iter()
+        .flat_map(|t| t.tasks.iter().map(|d| Task::new(t.root, d)))
+        .collect();
     v.sort_by_key(|t| t.id);
     v
 }
 
-/// The black-box task `id`, if one is registered.
-pub fn black_box_task(id: &str) -> Option<&'static BlackBoxTaskDef> {
-    inventory::iter::<BlackBoxTaskDef>
+/// The task registered as `id`, or an error listing the registered ids.
+pub fn task(id: &str) -> Result<Task, EnvError> {
+    tasks()
         .into_iter()
         .find(|t| t.id == id)
-}
-
-/// A training config of a registered task for one learning library (Isaac Lab's
-/// `rsl_rl_cfg_entry_point`): `inventory::submit! { AgentCfgDef { task, library, file_name,
-/// config } }`.
-pub struct AgentCfgDef {
-    /// Task id the config trains.
-    pub task: &'static str,
-    /// Learning library / workflow, e.g. `"rsl_rl"` (step-based PPO).
-    pub library: &'static str,
-    /// File name used in error messages.
-    pub file_name: &'static str,
-    /// The config (RON text).
-    pub config: &'static str,
-}
-
-inventory::collect!(AgentCfgDef);
-
-/// The training config registered for `task` and `library`, if any.
-pub fn agent_cfg(task: &str, library: &str) -> Option<&'static AgentCfgDef> {
-    inventory::iter::<AgentCfgDef>
-        .into_iter()
-        .find(|a| a.task == task && a.library == library)
-}
-
-/// All registered tasks, sorted by id.
-pub fn tasks() -> Vec<&'static TaskDef> {
-    let mut v: Vec<&TaskDef> = inventory::iter::<TaskDef>.into_iter().collect();
-    v.sort_by_key(|t| t.id);
-    v
-}
-
-/// The step-based task behind `id` (itself, or the task a black-box task wraps) and the
-/// overrides that make its config `id`'s env, followed by `overrides`.
-pub fn resolve_task(
-    id: &str,
-    overrides: &[String],
-) -> Result<(&'static TaskDef, Vec<String>), EnvError> {
-    let (env_id, bb_overrides): (&str, &[&str]) = match black_box_task(id) {
-        Some(bb) => (bb.env_task, bb.env_overrides),
-        None => (id, &[]),
-    };
-    let task = tasks()
-        .into_iter()
-        .find(|t| t.id == env_id)
         .ok_or_else(|| EnvError::InvalidTerm {
             field: "task".into(),
             message: format!(
-                "no task `{env_id}`; registered tasks: {:?}",
-                tasks()
-                    .iter()
-                    .map(|t| t.id)
-                    .chain(black_box_tasks().iter().map(|t| t.id))
-                    .collect::<Vec<_>>()
+                "no task `{id}`; registered tasks: {:?}",
+                tasks().iter().map(|t| t.id).collect::<Vec<_>>()
             ),
-        })?;
-    let all = task
-        .overrides
-        .iter()
-        .chain(bb_overrides)
-        .map(|s| s.to_string())
-        .chain(overrides.iter().cloned())
-        .collect();
-    Ok((task, all))
+        })
+}
+
+/// Every bundled config file of every task crate (for loading, including, exporting).
+pub fn bundled_configs() -> &'static Bundled {
+    static BUNDLED: OnceLock<Bundled> = OnceLock::new();
+    BUNDLED.get_or_init(|| {
+        Bundled::new(inventory::iter::<TaskTable>.into_iter().flat_map(|t| {
+            t.files
+                .iter()
+                .map(move |(path, text)| (format!("{}/{path}", t.root), *text))
+        }))
+    })
+}
+
+/// Loads a config file (on disk, or bundled when its path starts with `<bundled>`) with its
+/// includes and `overrides` applied.
+pub fn load_config(path: &Path, overrides: &[String]) -> Result<Node, EnvError> {
+    Ok(orbit_core::config::load_document_with(
+        bundled_configs(),
+        path,
+        overrides,
+    )?)
+}
+
+/// An env config document as the env is built from it: includes merged, `overrides` applied,
+/// the scene composed from its asset configs. Its [`Node::to_ron`] is a self-contained file
+/// that rebuilds the same env.
+pub fn load_env_config(path: &Path, overrides: &[String]) -> Result<Node, EnvError> {
+    let doc = load_config(path, overrides)?;
+    Ok(orbit_assets::compose_env_scene(&doc)?)
 }
 
 /// Builds the env of a registered task with config overrides (`key.path=value`); for a
 /// black-box task, the step-based env it wraps.
 pub fn make(id: &str, overrides: &[String]) -> Result<ManagerBasedRlEnv, EnvError> {
-    let (task, all) = resolve_task(id, overrides)?;
-    ManagerBasedRlEnv::from_ron(task.config, task.file_name, &all)
+    make_from_file(&task(id)?.env, overrides)
+}
+
+/// Builds the env of a config file (on disk or bundled) with overrides.
+pub fn make_from_file(path: &Path, overrides: &[String]) -> Result<ManagerBasedRlEnv, EnvError> {
+    ManagerBasedRlEnv::from_document(&load_env_config(path, overrides)?)
+}
+
+/// Writes the config files of task `id` (env, agent, black-box, and every file they include)
+/// under `dir`, keeping their relative layout so the includes still resolve; returns the
+/// written paths. Existing files are not overwritten.
+pub fn export_task_configs(id: &str, dir: &Path) -> Result<Vec<PathBuf>, EnvError> {
+    let task = task(id)?;
+    let mut files: Vec<PathBuf> = Vec::new();
+    for top in [
+        Some(&task.env),
+        task.agent.as_ref(),
+        task.black_box.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        for dep in orbit_core::config::dependencies(bundled_configs(), top)? {
+            if !files.contains(&dep) {
+                files.push(dep);
+            }
+        }
+    }
+    let io = |path: &Path, e: std::io::Error| EnvError::InvalidTerm {
+        field: "export".into(),
+        message: format!("cannot write `{}`: {e}", path.display()),
+    };
+    // Every target is checked before anything is written, so a refusal leaves no partial copy.
+    let mut targets = Vec::with_capacity(files.len());
+    for file in &files {
+        let relative = file
+            .strip_prefix(orbit_core::config::BUNDLED_ROOT)
+            .unwrap_or(file);
+        let target = dir.join(relative);
+        if target.exists() {
+            return Err(EnvError::InvalidTerm {
+                field: "export".into(),
+                message: format!(
+                    "`{}` exists; export into an empty directory (nothing was written)",
+                    target.display()
+                ),
+            });
+        }
+        targets.push(target);
+    }
+    for (file, target) in files.iter().zip(&targets) {
+        let text = bundled_configs().get(file).unwrap_or_default();
+        if let Some(parent) = target.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+        }
+        std::fs::write(target, text).map_err(|e| io(target, e))?;
+    }
+    Ok(targets)
 }

@@ -32,7 +32,7 @@ const CFG: &str = r#"(
     num_envs: 4,
     decimation: 3,
     sim: (dt: 0.01),
-    scene: (bundled: "box_pushing_scene.ron"),
+    scene: (env_spacing: 2.5, articulations: {"robot": (asset: "franka_panda_rod")}, rigid_objects: {"box": (asset: "push_box")}, static_objects: {"table": (asset: "lab_table"), "robot_mount": (asset: "franka_mount")}),
     actions: {"arm": (func: "joint_effort", params: {"asset": "robot", "joint_names": ["panda_joint.*"]})},
     observations: {"policy": (terms: {"q": (func: "joint_pos")})},
     episode_length_s: 0.09,

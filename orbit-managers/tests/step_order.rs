@@ -1,8 +1,8 @@
 //! The step and reset order of `ManagerBasedRlEnv` and `ManagerBasedEnv` as a contract (Isaac
-//! Lab's order, spec §1): probe terms of every kind append what they see to a per-thread log,
-//! and the tests compare the log with the order the spec prescribes. The log is per thread, so
-//! each manager has one probe term: managers compute several terms concurrently, and a single
-//! term stays on the calling thread.
+//! Lab's `ManagerBasedRLEnv.step` and `_reset_idx`): probe terms of every kind append what they
+//! see to a per-thread log, and the tests compare the log with Isaac Lab's order. The log is per
+//! thread, so each manager has one probe term: managers compute several terms concurrently, and a
+//! single term stays on the calling thread.
 
 use std::cell::RefCell;
 
@@ -149,7 +149,7 @@ const BASE: &str = r#"
     num_envs: 2,
     decimation: 3,
     sim: (dt: 0.01),
-    scene: (bundled: "box_pushing_scene.ron"),
+    scene: (env_spacing: 2.5, articulations: {"robot": (asset: "franka_panda_rod")}, rigid_objects: {"box": (asset: "push_box")}, static_objects: {"table": (asset: "lab_table"), "robot_mount": (asset: "franka_mount")}),
     actions: {"probe": (func: "probe_action")},
     observations: {"policy": (terms: {"probe": (func: "probe_observation")})},
     events: {

@@ -1,6 +1,6 @@
-//! ProDMP against the numbers the spec prints (§7.4) and the facts of the DMP it solves: the
-//! boundary condition at the start, the critically damped homogeneous solution, the ODE with
-//! its forcing term, and that a plan started from another plan's state continues it.
+//! ProDMP against MP_PyTorch 0.1.3's numbers for Fancy Gym's settings and the facts of the DMP
+//! it solves: the boundary condition at the start, the critically damped homogeneous solution,
+//! the ODE with its forcing term, and that a plan started from another plan's state continues it.
 
 use orbit_mp::{MpError, ProDmp, ProDmpCfg};
 
@@ -57,9 +57,9 @@ fn params(n: usize, seed: u32) -> Vec<f32> {
         .collect()
 }
 
-/// Centres (evenly spaced in time, in phase) and widths for factors 2 and 3 (spec §7.4).
+/// Centres (evenly spaced in time, in phase) and widths for factors 2 and 3 (MP_PyTorch 0.1.3).
 #[test]
-fn centres_and_widths_match_the_spec() {
+fn centres_and_widths_match_mp_pytorch() {
     let centres = [1.0, 0.4723666, 0.2231302, 0.1053992, 0.0497871];
     for (factor, widths) in [
         (2.0, [7.184, 32.196, 144.294, 646.682, 646.682]),
@@ -73,10 +73,10 @@ fn centres_and_widths_match_the_spec() {
     }
 }
 
-/// Auto-scaling divides each column by its maximum: the spec's factors for the replanning
+/// Auto-scaling divides each column by its maximum: MP_PyTorch 0.1.3's factors for the replanning
 /// config, times the weight and goal scale 0.3.
 #[test]
-fn auto_scale_factors_match_the_spec() {
+fn auto_scale_factors_match_mp_pytorch() {
     let p = ProDmp::new(replan_cfg()).unwrap();
     let factors = [116.482, 145.776, 322.364, 814.242, 992.600, 1.0];
     for (j, (&got, want)) in p.column_scales().iter().zip(factors).enumerate() {

@@ -1,10 +1,10 @@
-//! ProMP against the spec's basis rows (§7.2) and Fancy Gym's desired trajectories from the
+//! ProMP against MP_PyTorch 0.1.3's basis rows and Fancy Gym's desired trajectories from the
 //! MuJoCo reference rollouts, plus the identities the construction implies.
 
 use orbit_mp::{MpError, ProMp, ProMpCfg};
 use serde::Deserialize;
 
-/// Fancy Gym's `fancy_ProMP/BoxPushing…` ProMP (spec §7.1–7.2).
+/// Fancy Gym's `fancy_ProMP/BoxPushing…` ProMP (its `box_pushing/mp_wrapper.py` settings).
 fn box_pushing() -> ProMp {
     ProMp::new(ProMpCfg {
         num_dof: 7,
@@ -21,7 +21,7 @@ fn box_pushing() -> ProMp {
     .unwrap()
 }
 
-/// Centres (0, 0.2, …, 1) and widths h = 2/0.2² = 50, as the spec lists.
+/// Centres (0, 0.2, …, 1) and widths h = 2/0.2² = 50, as MP_PyTorch 0.1.3 places them.
 #[test]
 fn basis_centres_and_widths() {
     let p = box_pushing();
@@ -34,9 +34,9 @@ fn basis_centres_and_widths() {
     assert_eq!(b.learned(), 1..6);
 }
 
-/// The basis rows at t = 0.02, 0.5, 1.0 and 2.0 s that the spec prints (6 decimals).
+/// The basis rows at t = 0.02, 0.5, 1.0 and 2.0 s that MP_PyTorch 0.1.3 computes (6 decimals).
 #[test]
-fn basis_rows_match_the_spec() {
+fn basis_rows_match_mp_pytorch() {
     let p = box_pushing();
     let rows: [(usize, [f64; 6]); 4] = [
         (0, [0.699738, 0.284492, 0.015654, 0.000117, 0.0, 0.0]),
@@ -52,7 +52,7 @@ fn basis_rows_match_the_spec() {
         for (j, (&got, want)) in row.iter().zip(expected).enumerate() {
             assert!(
                 (got - want).abs() < 6e-7,
-                "t = {}: basis {j} is {got}, the spec says {want}",
+                "t = {}: basis {j} is {got}, MP_PyTorch gives {want}",
                 p.times()[k]
             );
         }

@@ -1,5 +1,5 @@
 //! The black-box (episodic) wrapper: Fancy Gym's `BlackBoxWrapper` over a
-//! [`ManagerBasedRlEnv`] (`shared/spec/box_pushing.md` §7.3, §7.5).
+//! [`ManagerBasedRlEnv`] (`fancy_gym/black_box/black_box_wrapper.py`, with its replanning).
 //!
 //! The policy picks the parameters of a movement primitive once per episode (or once per
 //! replanning segment) from a *context*, a masked observation. One wrapper step turns every
@@ -15,6 +15,7 @@
 
 use std::collections::BTreeMap;
 
+use orbit_core::config::Node;
 use orbit_managers::ManagerBasedRlEnv;
 use orbit_managers::term::JointActionKind;
 use orbit_mp::{MpError, ProDmp, ProDmpCfg, ProMp, ProMpCfg};
@@ -22,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{RlError, VecEnv, VecEnvStep};
 
-/// A black-box env's settings (RON, e.g. `tasks/box_pushing/config/black_box_promp.ron`).
+/// A black-box env's settings (RON, e.g. `tasks/box_pushing/config/black_box/promp.ron`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BlackBoxCfg {
@@ -43,9 +44,9 @@ pub struct BlackBoxCfg {
 /// The movement primitive of a black-box env.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub enum TrajectoryCfg {
-    /// A ProMP (§7.2).
+    /// A ProMP (Paraschos et al. 2013).
     ProMp(ProMpCfg),
-    /// A ProDMP (§7.4).
+    /// A ProDMP (Li et al. 2023).
     ProDmp(ProDmpCfg),
 }
 
@@ -388,8 +389,24 @@ impl BlackBoxEnv {
         overrides: &[String],
     ) -> Result<Self, RlError> {
         let doc = orbit_core::config::parse_document(text, file_name, overrides)?;
-        let cfg: BlackBoxCfg = orbit_core::config::from_node(&doc)?;
-        Self::new(env, cfg, file_name)
+        Self::from_document(env, &doc)
+    }
+
+    /// Loads a black-box config file (on disk, or bundled: `<bundled>/…`) with `overrides` and
+    /// wraps `env`.
+    pub fn load(
+        env: ManagerBasedRlEnv,
+        path: &std::path::Path,
+        overrides: &[String],
+    ) -> Result<Self, RlError> {
+        let doc = orbit_managers::load_config(path, overrides)?;
+        Self::from_document(env, &doc)
+    }
+
+    /// Wraps `env` with the black-box config document `doc` (a loaded file, includes merged).
+    pub fn from_document(env: ManagerBasedRlEnv, doc: &Node) -> Result<Self, RlError> {
+        let cfg: BlackBoxCfg = orbit_core::config::from_node(doc)?;
+        Self::new(env, cfg, &doc.span.file.display().to_string())
     }
 
     /// The wrapped env.

@@ -191,6 +191,15 @@ impl RunnerCfg {
         Ok(cfg)
     }
 
+    /// Loads a runner config file (on disk, or bundled: `<bundled>/…`) with its includes and
+    /// `overrides` (`key.path=value`) applied.
+    pub fn load(path: &std::path::Path, overrides: &[String]) -> Result<Self, crate::RlError> {
+        let doc = orbit_managers::load_config(path, overrides)?;
+        let cfg: RunnerCfg = orbit_core::config::from_overridden_node(&doc, overrides)?;
+        cfg.validate(&path.display().to_string())?;
+        Ok(cfg)
+    }
+
     /// Checks the values serde cannot (positive sizes, probabilities in range).
     pub fn validate(&self, file_name: &str) -> Result<(), crate::RlError> {
         let bad = |field: &str, message: String| {

@@ -1,5 +1,5 @@
-//! The scalars of a run under RSL-RL's TensorBoard tag names (spec §6.5): `scalars.csv`, one
-//! row per value, and a TensorBoard event file.
+//! The scalars of a run under RSL-RL's TensorBoard tag names (`Loss/...`, `Perf/...`,
+//! `Train/...`): `scalars.csv`, one row per value, and a TensorBoard event file.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};

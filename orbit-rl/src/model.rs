@@ -93,8 +93,8 @@ impl Mlp {
 /// chunks (`[chunks, 1, d_out]`). The bias gradient is then a sum over each chunk's rows
 /// (`chunks × d_out` sums, in parallel) followed by a small sum over the chunks. burn's
 /// `Linear` sums all rows into the `d_out` outputs in one reduction, which a GPU runs with
-/// `d_out` outputs' worth of parallelism: at 393 216 rows on an H100 that took 3.5 ms per
-/// 128- or 256-wide layer, a third of a gradient step (docs/benchmarks.md).
+/// `d_out` outputs' worth of parallelism, far too little for a rollout of hundreds of thousands
+/// of rows (docs/benchmarks.md).
 fn chunked_linear(layer: &Linear, x: Tensor<3>) -> Tensor<3> {
     let chunks = x.dims()[0];
     let y = burn::tensor::module::linear(x, layer.weight.val(), None);

@@ -1,4 +1,4 @@
-//! Proximal policy optimisation with RSL-RL's exact semantics (spec §6.3): time-out
+//! Proximal policy optimisation with RSL-RL's exact semantics (its `algorithms/ppo.py`): time-out
 //! bootstrapping, GAE, whole-rollout advantage normalisation, one shuffle reused across epochs,
 //! the KL-adaptive learning rate applied per minibatch before its gradient step, clipped
 //! surrogate and value losses, an entropy bonus and a gradient-norm clip (global, or per
@@ -73,9 +73,8 @@ struct StepTensors {
     critic_obs: Option<Tensor<2>>,
     /// The action means the forward pass computed (kept on the device, never uploaded).
     mu: Tensor<2>,
-    /// The sampled actions, uploaded with the step: a few MB each time, where copying and
-    /// uploading the whole rollout's (with the means) held the host for about a quarter of a
-    /// second at the start of a 131 072-env update before the device had work.
+    /// The sampled actions, uploaded with the step (a few MB each time), so that the update
+    /// does not start by copying the whole rollout's actions while the device waits.
     actions: Tensor<2>,
 }
 

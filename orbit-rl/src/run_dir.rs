@@ -1,4 +1,4 @@
-//! Run directories and checkpoint lookup, as Isaac Lab lays them out (spec §9.3):
+//! Run directories and checkpoint lookup, as Isaac Lab lays them out (`logs/rsl_rl/...`):
 //! `logs/<experiment>/<YYYY-MM-DD_HH-MM-SS>[_<run_name>]/model_<it>.{bpk,adam.bpk,json}`.
 
 use std::path::{Path, PathBuf};

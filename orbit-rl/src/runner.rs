@@ -1,4 +1,4 @@
-//! The on-policy runner (RSL-RL's `OnPolicyRunner`, spec §6.2): collect a rollout, compute
+//! The on-policy runner (RSL-RL's `OnPolicyRunner`): collect a rollout, compute
 //! returns, update, log, checkpoint.
 
 use std::collections::{BTreeMap, VecDeque};

@@ -96,8 +96,8 @@ impl RolloutStorage {
     }
 
     /// Computes GAE returns and advantages from the stored rewards, dones and values and the
-    /// values of the states after the last step (spec §6.3), then normalises the advantages
-    /// over the whole rollout unless `per_mini_batch`.
+    /// values of the states after the last step (RSL-RL's `compute_returns`), then normalises the
+    /// advantages over the whole rollout unless `per_mini_batch`.
     pub fn compute_returns(
         &mut self,
         last_values: &[f32],

@@ -27,6 +27,8 @@
 //! Every failure is a [`ConfigError`] whose `Display` starts with `file:line:col` (or names the
 //! override), then the field path and what was expected.
 
+#[cfg(test)]
+mod bundled_tests;
 mod de;
 mod error;
 mod include;
@@ -43,6 +45,7 @@ use std::path::Path;
 use serde::de::DeserializeOwned;
 
 pub use error::ConfigError;
+pub use include::{BUNDLED_ROOT, Bundled, is_bundled};
 pub use node::{Node, NodeKind, Span};
 
 /// Loads a `T` from the RON file at `path`, following its includes and applying `overrides`
@@ -70,9 +73,30 @@ pub fn from_str<T: DeserializeOwned>(
 /// Loads the RON file at `path` as a merged document tree, with includes resolved and
 /// `overrides` applied (for saving with [`Node::to_ron`] or inspecting with [`node_at`]).
 pub fn load_document(path: impl AsRef<Path>, overrides: &[String]) -> Result<Node, ConfigError> {
-    let mut document = include::load_file(path.as_ref())?;
+    load_document_with(&Bundled::default(), path, overrides)
+}
+
+/// [`load_document`] where `path` and the files it includes may also be `bundled` ones: a
+/// path starting with [`BUNDLED_ROOT`] names a bundled file, and a bundled file's includes
+/// are relative to it, resolved in memory. A file on disk may include a bundled file by its
+/// full name (`#include "<bundled>/reach/env/reach.ron"`).
+pub fn load_document_with(
+    bundled: &Bundled,
+    path: impl AsRef<Path>,
+    overrides: &[String],
+) -> Result<Node, ConfigError> {
+    let mut document = include::load_file(bundled, path.as_ref())?;
     overrides::apply(&mut document, overrides)?;
     Ok(document)
+}
+
+/// The file at `path` followed by every file it includes, directly or not, each once (what
+/// must be copied for the file to load elsewhere); paths as the loader names them.
+pub fn dependencies(
+    bundled: &Bundled,
+    path: impl AsRef<Path>,
+) -> Result<Vec<std::path::PathBuf>, ConfigError> {
+    include::dependencies(bundled, path.as_ref())
 }
 
 /// Parses RON `text` (called `file_name` in errors) into a merged document tree, with includes
@@ -91,6 +115,26 @@ pub fn parse_document(
 /// file `<override N>`; [`load`] and [`from_str`] also append the override's text.
 pub fn from_node<T: DeserializeOwned>(node: &Node) -> Result<T, ConfigError> {
     de::from_node(node)
+}
+
+/// Lays `top` over `base` with the deep merge of `#include` (structs field-wise, maps
+/// key-wise, anything else replaced).
+pub fn merge(base: &mut Node, top: Node) {
+    merge::merge_into(base, top)
+}
+
+/// Applies command-line style overrides (`a.b[0]["k"]=value`) to a document tree in order.
+pub fn apply_overrides(document: &mut Node, overrides: &[String]) -> Result<(), ConfigError> {
+    overrides::apply(document, overrides)
+}
+
+/// [`from_node`] for a document that `overrides` were applied to: an error about a value an
+/// override set also shows the override's text.
+pub fn from_overridden_node<T: DeserializeOwned>(
+    node: &Node,
+    overrides: &[String],
+) -> Result<T, ConfigError> {
+    from_node(node).map_err(|e| overrides::attribute(e, overrides))
 }
 
 /// The node at a field path such as `sim.backend`, `scene.articulations[0]` or

@@ -127,7 +127,7 @@ impl Node {
 
     /// The text that identifies a map key: strings and identifiers by their contents, other
     /// values by their RON form. Keys are compared (in merges, overrides, duplicate checks) by it.
-    pub(crate) fn key_text(&self) -> String {
+    pub fn key_text(&self) -> String {
         match &self.kind {
             NodeKind::Str(s) | NodeKind::Unit(s) => s.clone(),
             _ => self.to_ron().trim_end().to_string(),

@@ -97,11 +97,17 @@ fn set(root: &mut Node, segments: &[Segment], value: Node) -> Result<(), String>
                 let missing = describe_path(&segments[..=depth]);
                 return Err(format!("{missing} does not exist, so it cannot be indexed"));
             }
-            let empty = Node {
-                kind: NodeKind::Struct {
+            // `a["k"]` creates `a` as a map (so it merges key-wise over an included map),
+            // `a.f` as a struct.
+            let kind = match segments.get(depth + 1) {
+                Some(Segment::Key(_)) => NodeKind::Map(Vec::new()),
+                _ => NodeKind::Struct {
                     name: None,
                     fields: Vec::new(),
                 },
+            };
+            let empty = Node {
+                kind,
                 span: value.span.clone(),
             };
             insert(node, segment, empty, &segments[..depth])?;

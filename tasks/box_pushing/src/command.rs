@@ -50,7 +50,7 @@ struct TargetPose {
     metrics: [(&'static str, Vec<f32>); 3],
 }
 
-/// Fancy Gym's success thresholds (spec §5.3).
+/// Fancy Gym's success threshold on the box's distance to the target (m).
 pub const SUCCESS_DISTANCE: f32 = 0.05;
 /// Fancy Gym's success threshold on the orientation error (rad).
 pub const SUCCESS_ANGLE: f32 = 0.5;

@@ -1,6 +1,6 @@
-//! Fancy Gym's offline IK (`calculateOfflineIK`, spec §2.8) and the reset event that places the
-//! arm with the rod tip inside the box: resolved-rate IK with a weighted pseudo-inverse, a
-//! null-space posture task with joint-limit avoidance and an adaptive step.
+//! Fancy Gym's offline IK (`calculateOfflineIK` in `box_pushing_utils.py`) and the reset event
+//! that places the arm with the rod tip inside the box: resolved-rate IK with a weighted
+//! pseudo-inverse, a null-space posture task with joint-limit avoidance and an adaptive step.
 
 use glam::{Quat, Vec3};
 use nalgebra::{Matrix6, SMatrix, Vector6};

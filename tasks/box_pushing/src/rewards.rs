@@ -1,5 +1,6 @@
-//! Fancy Gym's box-pushing reward terms (spec §5.1), each returning the per-step quantity that
-//! the config weights: distances and angles are positive, penalties come from negative weights.
+//! Fancy Gym's box-pushing reward terms (`box_pushing_env.py`), each returning the per-step
+//! quantity that the config weights: distances and angles are positive, penalties come from
+//! negative weights.
 
 use glam::Quat;
 use orbit_core::math::{Pose, rotation_distance};
@@ -226,7 +227,7 @@ inventory::submit! { RewardTermDef { name: "action_energy", build: |c| term(c, Q
 inventory::submit! { RewardTermDef { name: "arm_joint_speed", build: |c| term(c, Quantity::JointSpeed) } }
 inventory::submit! { RewardTermDef { name: "spatial_sparse_bonus", build: |c| term(c, Quantity::SpatialBonus) } }
 
-/// Parameters of `joint_limit_violation`: Fancy Gym's limits (spec §2.5).
+/// Parameters of `joint_limit_violation`: Fancy Gym's limits (`box_pushing_utils.py`).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct JointLimitParams {

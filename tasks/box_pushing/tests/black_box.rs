@@ -3,7 +3,7 @@
 //! target pose, joint-position control inverts the action term exactly, replanning runs four
 //! segments that continue each other, and unusable setups are errors.
 
-use orbit_managers::{black_box_task, make};
+use orbit_managers::{make, task};
 use orbit_mp::{ProMp, ProMpCfg};
 use orbit_physics_rapier as _;
 use orbit_rl::{BlackBoxEnv, RlError, VecEnv};
@@ -11,10 +11,10 @@ use orbit_task_box_pushing as _;
 
 /// The black-box task `id` with `num_envs` envs on the CPU backend.
 fn bb_env(id: &str, num_envs: usize, bb_overrides: &[&str]) -> Result<BlackBoxEnv, RlError> {
-    let def = black_box_task(id).expect("registered");
+    let def = task(id).expect("registered");
     let env = make(id, &[format!("num_envs={num_envs}"), "seed=5".into()])?;
     let user: Vec<String> = bb_overrides.iter().map(|s| s.to_string()).collect();
-    BlackBoxEnv::from_ron(env, def.config, def.file_name, &def.overrides_with(&user))
+    BlackBoxEnv::load(env, &def.black_box.expect("a black-box task"), &user)
 }
 
 /// Deterministic parameters in [-scale, scale].
@@ -224,8 +224,8 @@ fn unusable_setups_are_errors() {
     ));
     assert!(e.contains("context"), "{e}");
     let env = make("BoxPushing-TaskSpace-Franka-v0", &["num_envs=1".into()]).unwrap();
-    let def = black_box_task("BoxPushing-ProMP-Franka-v0").unwrap();
-    let e = err(BlackBoxEnv::from_ron(env, def.config, def.file_name, &[]));
+    let def = task("BoxPushing-ProMP-Franka-v0").unwrap();
+    let e = err(BlackBoxEnv::load(env, &def.black_box.unwrap(), &[]));
     assert!(e.contains("does not drive joints"), "{e}");
 
     let mut bb = bb_env("BoxPushing-ProMP-Franka-v0", 2, &[]).unwrap();

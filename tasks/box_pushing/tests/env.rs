@@ -201,10 +201,14 @@ fn time_out_step_returns_the_new_episodes_observation() {
     );
 }
 
-/// Every registered task builds and runs an episode; the success metric is logged at the end.
+/// Every registered step-based task builds and runs an episode; the success metric is logged
+/// at the end.
 #[test]
 fn every_registered_task_runs_an_episode() {
-    let tasks = orbit_managers::tasks();
+    let tasks: Vec<_> = orbit_managers::tasks()
+        .into_iter()
+        .filter(|t| !t.is_black_box())
+        .collect();
     assert!(
         tasks.len() >= 4,
         "{:?}",
@@ -273,8 +277,9 @@ fn temporal_sparse_pays_at_the_last_step() {
 #[test]
 fn differential_ik_reaches_a_tcp_target() {
     let arm = "actions.arm=(func: \"differential_ik\", params: (joint_names: [\"panda_joint[1-7]\"], body_name: \"tcp\", command_type: Pose, ik_method: Dls(lambda_val: 0.01), compensate_bias: true))";
-    let scene = "scene.overrides=[\"articulations[0].actuators.arm.stiffness=400.0\", \"articulations[0].actuators.arm.damping=80.0\"]";
-    let mut env = env(1, &[arm, scene]);
+    let stiffness = "scene.articulations[\"robot\"].actuators[\"arm\"].stiffness=400.0";
+    let damping = "scene.articulations[\"robot\"].actuators[\"arm\"].damping=80.0";
+    let mut env = env(1, &[arm, stiffness, damping]);
     env.reset().unwrap();
     let tcp = |env: &ManagerBasedRlEnv| {
         let layout = &env.scene().backend.layout().articulations[0];
@@ -495,7 +500,7 @@ fn privileged_critic_terms_read_frames_and_box_velocity() {
     );
 }
 
-/// Fancy Gym's offline IK for the default box pose reproduces its q₀ (spec §2.8): the same 86
+/// Fancy Gym's offline IK for the default box pose reproduces its q₀ (MuJoCo 2.3.3): the same 86
 /// accepted iterations and q₀ to within 1e-5 rad (measured 2.4e-7, f32 resolution), the tcp
 /// within √1e-5 = 3.2 mm of its target with the rod pointing down.
 #[test]

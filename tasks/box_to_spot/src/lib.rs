@@ -5,11 +5,15 @@ mod rewards;
 pub use rewards::ObjectPointParams;
 
 inventory::submit! {
-    orbit_managers::TaskDef {
-        id: "BoxToSpot-JointPos-Franka-v0",
-        description: "Franka pushes the box to a fixed spot on the table, joint position targets",
-        file_name: "box_to_spot.ron (bundled)",
-        config: include_str!("../config/box_to_spot.ron"),
-        overrides: &[], // a variant reuses `config` with its own overrides
+    orbit_managers::TaskTable {
+        root: "box_to_spot",                       // bundled as <bundled>/box_to_spot/…
+        files: orbit_managers::config_files!("box_to_spot.ron", "agents/ppo.ron"),
+        tasks: &[orbit_managers::TaskDef {
+            id: "BoxToSpot-JointPos-Franka-v0",
+            description: "Franka pushes the box to a fixed spot on the table, joint position targets",
+            env: "box_to_spot.ron",                // paths are relative to config/
+            agent: Some("agents/ppo.ron"),         // what `train` uses
+            black_box: None,                       // a step-based task
+        }],
     }
 }

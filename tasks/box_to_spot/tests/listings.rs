@@ -33,6 +33,7 @@ fn listings_match_the_crate() {
     checked.sort();
     let expected = [
         "Cargo.toml",
+        "config/agents/ppo.ron",
         "config/box_to_spot.ron",
         "src/lib.rs",
         "src/rewards.rs",
@@ -40,6 +41,6 @@ fn listings_match_the_crate() {
     ];
     assert_eq!(
         checked, expected,
-        "the tutorial lists these five files of the crate"
+        "the tutorial lists these six files of the crate"
     );
 }

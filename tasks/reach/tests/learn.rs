@@ -51,9 +51,10 @@ fn evaluate(policy: &Policy) -> (f32, f32) {
 
 #[test]
 fn ppo_learns_to_reach() {
-    let def = orbit_managers::agent_cfg(TASK_ID, "rsl_rl").expect("reach has a PPO config");
+    let def = orbit_managers::task(TASK_ID).unwrap();
     let o: Vec<String> = AGENT.iter().map(|s| s.to_string()).collect();
-    let cfg = RunnerCfg::from_ron(def.config, def.file_name, &o).unwrap_or_else(|e| panic!("{e}"));
+    let agent = def.agent.expect("reach has a PPO config");
+    let cfg = RunnerCfg::load(&agent, &o).unwrap_or_else(|e| panic!("{e}"));
     let iterations = cfg.max_iterations;
     let mut runner = OnPolicyRunner::new(env(64, 0), cfg, None, Device::flex()).unwrap();
     let (d0, r0) = evaluate(&runner.inference_policy());

@@ -29,7 +29,7 @@ fn runner_on(
     ];
     o.extend(env_overrides.iter().map(|s| s.to_string()));
     let env = RlVecEnv::new(make(TASK_ID, &o).unwrap_or_else(|e| panic!("{e}"))).unwrap();
-    let def = orbit_managers::agent_cfg(TASK_ID, "rsl_rl").unwrap();
+    let agent = orbit_managers::task(TASK_ID).unwrap().agent.unwrap();
     let mut o = vec![
         format!("seed={seed}"),
         "num_steps_per_env=8".into(),
@@ -37,7 +37,7 @@ fn runner_on(
         "empirical_normalization=true".into(),
     ];
     o.extend(agent_overrides.iter().map(|s| s.to_string()));
-    let cfg = RunnerCfg::from_ron(def.config, def.file_name, &o).unwrap();
+    let cfg = RunnerCfg::load(&agent, &o).unwrap();
     OnPolicyRunner::new(env, cfg, log_dir, Device::flex()).unwrap()
 }
 

@@ -3,7 +3,7 @@
 /// The task most tests run.
 pub const TASK: &str = "BoxPushing-Torque-Franka-v0";
 
-/// Fancy Gym's seed-0 target pose `(x, y, z, qw, qx, qy, qz)` (spec §5.5; a yaw of ≈ 3.0377 rad).
+/// Fancy Gym's target pose after `reset(seed=0)`, `(x, y, z, qw, qx, qy, qz)` (yaw ≈ 3.0377 rad).
 pub const SEED0_TARGET: [f32; 7] = [
     0.491_088_5,
     -0.207_191_96,
