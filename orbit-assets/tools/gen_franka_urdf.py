@@ -3,8 +3,11 @@
 
 Usage (from the workspace root):
 
-    python3 orbit-assets/tools/gen_franka_urdf.py ../shared/spec/franka_box_pushing_params.json \
-        > orbit-assets/assets/franka_panda_rod.urdf
+    python3 orbit-assets/tools/gen_franka_urdf.py > orbit-assets/assets/franka_panda_rod.urdf
+
+The parameters are read from `franka_box_pushing_params.json` beside this script (the numbers of
+Fancy Gym's `panda_rod.xml`, see its `_about`); another parameter file of the same layout may be
+given as the only argument.
 
 Needs Python 3 and numpy only; deterministic (fixed seeds), runs in about three minutes.
 
@@ -23,12 +26,13 @@ What it writes:
 import itertools
 import json
 import math
+import os
 import sys
 
 import numpy as np
 
-FINGER_OPENING = 0.00122  # m per finger after the first control step (spec §2.6, measured)
-EFFORT = [87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0]  # actuator forcerange (spec §2.5)
+FINGER_OPENING = 0.00122  # m per finger: where MuJoCo's finger-finger contacts push them in step 1
+EFFORT = [87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0]  # panda_rod.xml's motor forcerange, N m
 MISSING_WEIGHT = 2.0  # capsule fit: uncovered hull volume costs twice as much as excess volume
 TWO_CAPSULE_GAIN = 0.9  # use two capsules only if that lowers the fit objective by >= 10 %
 MC_SAMPLES = 10000  # optimisation sample (hull AABB grown by OPT_MARGIN)
@@ -265,9 +269,11 @@ def inertial_xml(mass, com, inertia, indent="    "):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: gen_franka_urdf.py path/to/franka_box_pushing_params.json")
-    src = sys.argv[1]
+    if len(sys.argv) > 2:
+        sys.exit("usage: gen_franka_urdf.py [path/to/franka_box_pushing_params.json]")
+    here = os.path.dirname(os.path.abspath(__file__))
+    default = os.path.join(here, "franka_box_pushing_params.json")
+    src = sys.argv[1] if len(sys.argv) == 2 else default
     with open(src) as f:
         params = json.load(f)
     robot = params["robot"]
@@ -282,13 +288,13 @@ def main():
     w("<!--\n")
     w("  GENERATED FILE - do not edit by hand.\n")
     w("  Generator: orbit-assets/tools/gen_franka_urdf.py\n")
-    w("  Source:    shared/spec/franka_box_pushing_params.json (Fancy Gym da1bced,\n")
+    w("  Source:    orbit-assets/tools/franka_box_pushing_params.json (Fancy Gym da1bced,\n")
     w("             fancy_gym/envs/mujoco/box_pushing/assets/panda_rod.xml, MuJoCo 2.3.3)\n")
     w("\n")
     w("  Franka Emika Panda with the Fancy Gym push rod. Frames, masses, COMs and full inertia\n")
     w("  tensors (about the COM, body axes) are the MuJoCo model's. Differences to the MJCF:\n")
     w("  - The two fingers are WELDED to the hand (fixed joints) at the opening MuJoCo settles to\n")
-    w(f"    after the first control step ({FINGER_OPENING} m each; spec 2.6 allows welding them).\n")
+    w(f"    after the first control step ({FINGER_OPENING} m each; unactuated, no task role).\n")
     w("    Their tip bodies are kept as fixed child links with their (large, as written) inertias.\n")
     w("  - Collision meshes are replaced by primitives: per link one or two capsules fitted to the\n")
     w("    decimated convex hull (rule in gen_franka_urdf.py: fit_capsules; statistics below),\n")
@@ -301,7 +307,7 @@ def main():
     w('<robot name="panda_rod">\n')
     w("  <!--\n")
     w("    orbit-rs extension (ignored by other URDF readers): panda_link0 sits on the robot mount\n")
-    w("    plate of box_pushing_scene.ron; both are in collision group 2 (value 2) with mask !2 so\n")
+    w("    plate (franka_mount.ron); both are in collision group 2 (value 2) with mask !2 so\n")
     w("    that they never collide with each other.\n")
     w("  -->\n")
     w('  <orbit_collision_filter link="panda_link0" groups="2" mask="4294967293"/>\n')

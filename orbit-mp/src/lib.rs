@@ -1,6 +1,6 @@
 //! Movement primitives for episodic (black-box) RL, following MP_PyTorch 0.1.3 as Fancy Gym's
-//! box pushing uses it (`shared/spec/box_pushing.md` §7.2): a linear phase, a zero-padded
-//! normalised RBF basis and ProMP trajectories, and ProDMP (§7.4) with its exponential phase,
+//! box pushing uses it (ProMP: Paraschos et al. 2013; ProDMP: Li et al. 2023): a linear phase, a
+//! zero-padded normalised RBF basis and ProMP trajectories, and ProDMP with its exponential phase,
 //! generated for all envs at once.
 
 mod basis;

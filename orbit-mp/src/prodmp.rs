@@ -1,4 +1,4 @@
-//! ProDMP trajectories (MP_PyTorch 0.1.3's `ProDMP` as Fancy Gym configures it, spec §7.4).
+//! ProDMP trajectories (MP_PyTorch 0.1.3's `ProDMP` as Fancy Gym configures it; Li et al. 2023).
 //!
 //! A ProDMP is a DMP `y'' = α(β(g − y) − y') + x(s)·Σ_j B_j(s)·w_j` (β = α/4, derivatives in
 //! scaled time `s = t/τ`) solved in closed form: the forced part is a linear combination of

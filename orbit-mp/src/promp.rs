@@ -1,5 +1,5 @@
-//! ProMP trajectories (MP_PyTorch's `ProMP` as Fancy Gym calls it, spec §7.2): per dof,
-//! `y(t) = q_start + Σ_j b_j(x(t)) · s · w_j` over the learned basis functions, sampled at
+//! ProMP trajectories (MP_PyTorch's `ProMP` as Fancy Gym calls it; Paraschos et al. 2013): per
+//! dof, `y(t) = q_start + Σ_j b_j(x(t)) · s · w_j` over the learned basis functions, sampled at
 //! `t_k = k·dt` for `k = 1..=num_steps`, with forward-difference velocities.
 
 use rayon::prelude::*;

@@ -1,4 +1,4 @@
-# Sourced by the device scripts (run from the repository root on the GPU machine): installs the
+# Sourced by the scripts here (run from the repository root on an H100 GPU machine): installs the
 # Vulkan loader from .gl/*.deb, unpacks the binaries .dev/<name>.xz to /tmp/bin/<name>, and
 # defines `col FILE TAG` (one tag's column of a scalars.csv as "iteration,value" lines),
 # `newest_run ROOT` (the newest run directory under ROOT/box_pushing) and `last_checkpoint DIR...`

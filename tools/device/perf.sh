@@ -3,7 +3,7 @@
 # from its third logged iteration on. BIN names the build (default train_sym: keep its symbols,
 # `strip --strip-debug`, or perf shows addresses only); .dev/perfkit.tar.xz holds perf and its
 # libraries (README). Prints the run's phase times; $OUT/perf.data.xz is the profile, to read on
-# the development machine with the same binary at /tmp/bin/$BIN (see README).
+# the machine that builds, with the same binary at /tmp/bin/$BIN (see README).
 source tools/device/common.sh
 mkdir -p /tmp/pk && tar xJf .dev/perfkit.tar.xz -C /tmp/pk
 P=/tmp/pk/perfkit; export LD_LIBRARY_PATH=$P/lib

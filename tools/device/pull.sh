@@ -1,4 +1,4 @@
-# On the development machine: bash tools/device/pull.sh <files_at>/runs-<TAG>-s*.tgz replaces
+# On the machine that builds: bash tools/device/pull.sh <results>/runs-<TAG>-s*.tgz replaces
 # .dev/runs/<TAG>-s<seed> with the runs of a seeds.sh call and keeps their logs in .dev/runlogs.
 set -e
 t=$(mktemp -d); for f in "$@"; do tar xzf "$f" -C $t; done

@@ -1,8 +1,8 @@
 # Concurrent step-based runs of the registered config (plus overrides XS) to MI iterations
 # (default 160, 1.57e7 interactions at 4 096 envs), one per seed in SEEDS, each resuming from
-# .dev/runs/<TAG>-s<seed> when an earlier call left one there (carry that folder). Writes
-# $OUT/runs-<TAG>-s<seed>.tgz per seed (the device tool returns files of up to 16 MiB, at most 8)
-# with the run's scalars, configs and last checkpoint (pull.sh unpacks them).
+# .dev/runs/<TAG>-s<seed> when an earlier call left one there (copy that folder along). Writes
+# $OUT/runs-<TAG>-s<seed>.tgz per seed with the run's scalars, configs and only its last
+# checkpoint, to keep the archives small (pull.sh unpacks them).
 #   SEEDS="1 2 3" TAG=x XS="agent.algorithm.desired_kl=0.02" MI=160 TO=500 bash tools/device/seeds.sh
 source tools/device/common.sh
 MI=${MI:-160}; TO=${TO:-540}; BIN=${BIN:-train}
