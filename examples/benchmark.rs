@@ -102,6 +102,7 @@ fn full_env(args: &Args, n: usize) -> Result<FullEnv, Box<dyn std::error::Error>
     overrides.push(format!("sim.solver_iterations={}", args.solver_iterations));
     overrides.push(format!("decimation={}", args.decimation));
     overrides.extend(args.env_overrides.iter().cloned());
+    orbit::link_registrations();
     let (mut env, _) = orbit::make_env(
         args.task.as_deref(),
         args.task_config.as_deref(),

@@ -13,8 +13,9 @@
 use std::collections::BTreeMap;
 
 use clap::Parser;
+use orbit::envs::VecEnvError;
 use orbit::rl::burn::tensor::Device;
-use orbit::rl::{OnPolicyRunner, RlError, RunnerCfg, VecEnv, VecEnvStep};
+use orbit::rl::{OnPolicyRunner, RunnerCfg, VecEnv, VecEnvStep};
 
 #[derive(Parser)]
 #[command(about = "The on-policy runner's own work per env step, on a null env")]
@@ -83,7 +84,7 @@ impl VecEnv for NullEnv {
     fn critic_observations(&self) -> &[f32] {
         &self.obs
     }
-    fn step(&mut self, _actions: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
+    fn step(&mut self, _actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         self.step += 1;
         for (i, o) in self.obs.iter_mut().enumerate() {
             *o = ((i as u32 ^ self.step) % 97) as f32 * 0.01;
@@ -99,7 +100,7 @@ impl VecEnv for NullEnv {
             interactions: 1,
         })
     }
-    fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), RlError> {
+    fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), VecEnvError> {
         Ok(())
     }
 }

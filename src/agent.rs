@@ -24,6 +24,7 @@ pub struct AgentArgs {
 /// Runs the task with uniform random actions in `[-1, 1]` (or zeros) and prints episode logs
 /// and throughput.
 pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error>> {
+    crate::link_registrations();
     let e = &args.env;
     let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &args.overrides);
     let (mut env, name) =

@@ -152,6 +152,7 @@ fn split_overrides(tokens: &[String]) -> Overrides {
 /// user's, then `num_envs`, the seed (the agent's, as Isaac Lab's script copies it) and the
 /// backend.
 pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
+    crate::link_registrations();
     let e = &args.env;
     let configs = crate::RunConfigs::resolve(
         args.task.as_deref(),
@@ -345,6 +346,7 @@ impl EpisodeSummary {
 /// Replays a trained policy (mean actions), prints each finished episode's return and the
 /// step's episode metrics, then the mean return and metrics over all played episodes.
 pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
+    crate::link_registrations();
     let overrides = split_overrides(&args.overrides);
     let configs = crate::RunConfigs::resolve(
         args.task.as_deref(),

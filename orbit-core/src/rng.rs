@@ -42,6 +42,9 @@ pub mod streams {
     pub const STARTUP: u32 = 5;
     /// Policy exploration / learner sampling.
     pub const POLICY: u32 = 6;
+    /// Random initial episode lengths (training's staggered start), one stream per env; the
+    /// learner's own streams are 16–18.
+    pub const EPISODE_LENGTH: u32 = 19;
 }
 
 /// The random sequence of one `(seed, env, stream)`; each draw advances a 64-bit counter.

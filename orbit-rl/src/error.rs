@@ -11,6 +11,9 @@ pub enum RlError {
     /// The environment failed (bad env config, invalid actions, backend errors).
     #[error(transparent)]
     Env(#[from] orbit_managers::EnvError),
+    /// The vectorised env failed (its wrapper's config, an env that does not fit it).
+    #[error(transparent)]
+    VecEnv(#[from] orbit_envs::VecEnvError),
     /// A runner config parsed but holds a value the learner cannot use.
     #[error("{file}: field `{field}`: {message}")]
     InvalidConfig {
@@ -48,9 +51,6 @@ pub enum RlError {
         /// What went wrong.
         message: String,
     },
-    /// A movement primitive's config or input is unusable (black-box envs).
-    #[error(transparent)]
-    Mp(#[from] orbit_mp::MpError),
     /// The learner's device could not be opened.
     #[error("learner device: {0}")]
     Device(String),

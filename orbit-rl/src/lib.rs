@@ -1,6 +1,6 @@
 //! Learners for orbit-rs: PPO with RSL-RL's semantics on burn, its rollout storage and
 //! observation normalisation, the on-policy runner with checkpoints and logs, and the
-//! inference [`Policy`].
+//! inference [`Policy`]. Envs reach them through [`VecEnv`] (crate `orbit-envs`).
 //!
 //! ```text
 //! VecEnv (RlVecEnv over a ManagerBasedRlEnv, or BlackBoxEnv: one movement primitive per episode)
@@ -11,7 +11,6 @@
 #![warn(missing_docs)]
 
 pub mod adam;
-pub mod black_box;
 pub mod cfg;
 mod error;
 pub mod logger;
@@ -24,16 +23,15 @@ pub mod run_dir;
 pub mod runner;
 pub mod storage;
 pub mod tensorboard;
-pub mod vec_env;
 
-pub use black_box::{BlackBoxCfg, BlackBoxEnv};
 pub use burn;
 pub use cfg::{LearnerDevice, RunnerCfg};
 pub use error::RlError;
+pub use orbit_envs::{VecEnv, VecEnvStep};
 pub use runner::{IterationLog, OnPolicyRunner, Policy};
-pub use vec_env::{RlVecEnv, VecEnv, VecEnvStep};
 
-/// Random streams of the learner (`EnvRng` stream ids; the env's own are 1–6).
+/// Random streams of the learner (`EnvRng` stream ids; the env's own are 1–6 and 19, in
+/// `orbit_core::rng::streams`).
 pub mod streams {
     /// Network initialisation.
     pub const INIT: u32 = 16;
@@ -41,6 +39,4 @@ pub mod streams {
     pub const ACTION_NOISE: u32 = 17;
     /// Minibatch shuffles, one stream per update.
     pub const SHUFFLE: u32 = 18;
-    /// Random initial episode lengths, one stream per env.
-    pub const EPISODE_LENGTH: u32 = 19;
 }

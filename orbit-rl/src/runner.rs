@@ -15,7 +15,7 @@ use crate::logger::ScalarLog;
 use crate::model::ActorCritic;
 use crate::normalizer::EmpiricalNormalizer;
 use crate::ppo::{LossStats, Ppo, tensor2, values};
-use crate::vec_env::VecEnv;
+use orbit_envs::VecEnv;
 
 /// Rows after which the observation statistics freeze (RSL-RL's `until`).
 const NORMALIZER_UNTIL: u64 = 100_000_000;

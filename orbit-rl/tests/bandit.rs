@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 
 use orbit_core::rng::EnvRng;
+use orbit_envs::VecEnvError;
 use orbit_rl::burn::tensor::Device;
 use orbit_rl::{OnPolicyRunner, RlError, RunnerCfg, VecEnv, VecEnvStep};
 
@@ -77,7 +78,7 @@ impl VecEnv for Bandit {
     fn critic_observations(&self) -> &[f32] {
         self.critic.as_deref().unwrap_or(&self.obs)
     }
-    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
+    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         for (e, r) in self.rewards.iter_mut().enumerate() {
             *r = -(0..2)
                 .map(|i| (actions[2 * e + i] - self.obs[2 * e + i]).powi(2))
@@ -96,7 +97,7 @@ impl VecEnv for Bandit {
             interactions: 1,
         })
     }
-    fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), RlError> {
+    fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), VecEnvError> {
         Ok(())
     }
 }

@@ -3,14 +3,14 @@
 //! target pose, joint-position control inverts the action term exactly, replanning runs four
 //! segments that continue each other, and unusable setups are errors.
 
+use orbit_envs::{BlackBoxEnv, VecEnv, VecEnvError};
 use orbit_managers::{make, task};
 use orbit_mp::{ProMp, ProMpCfg};
 use orbit_physics_rapier as _;
-use orbit_rl::{BlackBoxEnv, RlError, VecEnv};
 use orbit_task_box_pushing as _;
 
 /// The black-box task `id` with `num_envs` envs on the CPU backend.
-fn bb_env(id: &str, num_envs: usize, bb_overrides: &[&str]) -> Result<BlackBoxEnv, RlError> {
+fn bb_env(id: &str, num_envs: usize, bb_overrides: &[&str]) -> Result<BlackBoxEnv, VecEnvError> {
     let def = task(id).expect("registered");
     let env = make(id, &[format!("num_envs={num_envs}"), "seed=5".into()])?;
     let user: Vec<String> = bb_overrides.iter().map(|s| s.to_string()).collect();
@@ -193,7 +193,7 @@ fn replanning_segments_continue_each_other() {
 #[test]
 fn unusable_setups_are_errors() {
     #[track_caller]
-    fn err(r: Result<BlackBoxEnv, RlError>) -> String {
+    fn err(r: Result<BlackBoxEnv, VecEnvError>) -> String {
         match r {
             Ok(_) => panic!("expected an error"),
             Err(e) => e.to_string(),

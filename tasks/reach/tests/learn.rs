@@ -3,10 +3,11 @@
 //! Isaac Lab's full reach task needs ~10⁷ transitions, far beyond a CI run. Afterwards the
 //! mean-action policy ends its episodes much closer to the target than the untrained one.
 
+use orbit_envs::RlVecEnv;
 use orbit_managers::make;
 use orbit_physics_rapier as _;
 use orbit_rl::burn::tensor::Device;
-use orbit_rl::{OnPolicyRunner, Policy, RlVecEnv, RunnerCfg, VecEnv};
+use orbit_rl::{OnPolicyRunner, Policy, RunnerCfg, VecEnv};
 use orbit_task_reach::TASK_ID;
 
 /// The fixed-target variant: target (0.5, 0.1, 0.3) m in the robot's base frame.

@@ -1,10 +1,11 @@
 //! Runner contracts on the reach task: same seed ⇒ identical logs; checkpoints restore the
 //! policy exactly; the run directory holds what Isaac Lab's does.
 
+use orbit_envs::RlVecEnv;
 use orbit_managers::make;
 use orbit_physics_rapier as _;
 use orbit_rl::burn::tensor::Device;
-use orbit_rl::{IterationLog, OnPolicyRunner, Policy, RlVecEnv, RunnerCfg, VecEnv};
+use orbit_rl::{IterationLog, OnPolicyRunner, Policy, RunnerCfg, VecEnv};
 use orbit_task_reach::TASK_ID;
 
 fn runner(

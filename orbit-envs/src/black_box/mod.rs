@@ -18,115 +18,15 @@ use std::collections::BTreeMap;
 use orbit_core::config::Node;
 use orbit_managers::ManagerBasedRlEnv;
 use orbit_managers::term::JointActionKind;
-use orbit_mp::{MpError, ProDmp, ProDmpCfg, ProMp, ProMpCfg};
-use serde::{Deserialize, Serialize};
+use orbit_mp::{ProDmp, ProMp};
 
-use crate::{RlError, VecEnv, VecEnvStep};
+mod cfg;
+mod generator;
 
-/// A black-box env's settings (RON, e.g. `tasks/box_pushing/config/black_box/promp.ron`).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct BlackBoxCfg {
-    /// The movement primitive. Its `num_dof`, `dt` and `num_steps` default to the env's action
-    /// dimension, step and episode length.
-    pub trajectory: TrajectoryCfg,
-    /// How desired joint positions and velocities become the env's actions.
-    pub controller: ControllerCfg,
-    /// Index ranges `[start, end)` of the env's `policy` observation that form the context
-    /// (Fancy Gym's `context_mask`); default: the whole observation.
-    #[serde(default)]
-    pub context: Option<Vec<(usize, usize)>>,
-    /// Replan during the episode (Fancy Gym's `ReplanMPWrapper`); requires a ProDMP.
-    #[serde(default)]
-    pub replanning: Option<ReplanCfg>,
-}
+pub use cfg::{BlackBoxCfg, ControllerCfg, ReplanCfg, TrajectoryCfg};
+use generator::Generator;
 
-/// The movement primitive of a black-box env.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub enum TrajectoryCfg {
-    /// A ProMP (Paraschos et al. 2013).
-    ProMp(ProMpCfg),
-    /// A ProDMP (Li et al. 2023).
-    ProDmp(ProDmpCfg),
-}
-
-/// The tracking controller of a black-box env.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub enum ControllerCfg {
-    /// Fancy Gym's PD law on the measured joint state, used as the env's action:
-    /// `a = clip(Kp ∘ (q_d − q) + Kd ∘ (q̇_d − q̇), clip)`. On the torque env (`10·a + bias`)
-    /// this is Fancy Gym's controller.
-    Pd {
-        /// Kp, one per action value.
-        p_gains: Vec<f32>,
-        /// Kd, one per action value.
-        d_gains: Vec<f32>,
-        /// Range of the action (the env's action bounds).
-        #[serde(default = "unit_range")]
-        clip: (f32, f32),
-    },
-    /// The desired positions as joint position targets of the env's `joint_position` action
-    /// terms (inverting their `scale` and offset), tracked by the implicit PD drives: Orbit's
-    /// way.
-    JointPosition,
-}
-
-fn unit_range() -> (f32, f32) {
-    (-1.0, 1.0)
-}
-
-/// When to replan (Fancy Gym: every 25 steps, at most 4 plans, conditioned on the desired
-/// state).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ReplanCfg {
-    /// Env steps per segment.
-    pub interval: u32,
-    /// Plans per episode; the last runs to the episode's end.
-    pub max_plans: u32,
-    /// Start a new plan from the previous plan's desired state (else the measured one).
-    #[serde(default)]
-    pub condition_on_desired: bool,
-}
-
-/// A movement primitive ready to generate.
-enum Generator {
-    ProMp(ProMp),
-    ProDmp(ProDmp),
-}
-
-impl Generator {
-    fn num_params(&self) -> usize {
-        match self {
-            Generator::ProMp(p) => p.num_params(),
-            Generator::ProDmp(p) => p.num_params(),
-        }
-    }
-
-    /// Samples per plan.
-    fn num_steps(&self) -> usize {
-        match self {
-            Generator::ProMp(p) => p.cfg().num_steps,
-            Generator::ProDmp(p) => p.cfg().num_steps,
-        }
-    }
-
-    /// Trajectories from `t0` (a ProMP only starts at 0; checked on construction).
-    fn generate(
-        &self,
-        t0: f64,
-        params: &[f32],
-        q0: &[f32],
-        v0: &[f32],
-        pos: &mut [f32],
-        vel: &mut [f32],
-    ) -> Result<(), MpError> {
-        match self {
-            Generator::ProMp(p) => p.trajectories(params, q0, pos, vel),
-            Generator::ProDmp(p) => p.trajectories(t0, params, q0, v0, pos, vel),
-        }
-    }
-}
+use crate::{VecEnv, VecEnvError, VecEnvStep};
 
 /// The controller with its per-action constants.
 enum Controller {
@@ -171,8 +71,8 @@ pub struct BlackBoxEnv {
     empty_log: BTreeMap<String, f32>,
 }
 
-fn invalid(file: &str, field: &str, message: impl Into<String>) -> RlError {
-    RlError::InvalidConfig {
+fn invalid(file: &str, field: &str, message: impl Into<String>) -> VecEnvError {
+    VecEnvError::InvalidConfig {
         file: file.to_string(),
         field: field.to_string(),
         message: message.into(),
@@ -187,7 +87,7 @@ fn fit_to_env(
     dt: &mut f64,
     num_steps: &mut usize,
     env: &ManagerBasedRlEnv,
-) -> Result<(), RlError> {
+) -> Result<(), VecEnvError> {
     let (d, step_dt) = (env.action_dim(), f64::from(env.step_dt()));
     if *num_dof == 0 {
         *num_dof = d;
@@ -215,11 +115,15 @@ fn fit_to_env(
 
 impl BlackBoxEnv {
     /// Wraps and resets `env`. `file` names the config in errors.
-    pub fn new(mut env: ManagerBasedRlEnv, cfg: BlackBoxCfg, file: &str) -> Result<Self, RlError> {
+    pub fn new(
+        mut env: ManagerBasedRlEnv,
+        cfg: BlackBoxCfg,
+        file: &str,
+    ) -> Result<Self, VecEnvError> {
         let (n, dof) = (env.num_envs(), env.action_dim());
         // Episodes must end together, by their time-out: the envs run in lockstep.
         if let Some((name, _)) = env.cfg.terminations.0.iter().find(|(_, t)| !t.time_out) {
-            return Err(RlError::EnvMismatch(format!(
+            return Err(VecEnvError::Mismatch(format!(
                 "termination `{name}` can end an episode before its time-out; the black-box \
                  wrapper runs every env's whole episode in lockstep, so only time-out \
                  terminations are supported"
@@ -231,7 +135,7 @@ impl BlackBoxEnv {
         let position_controller = cfg.controller == ControllerCfg::JointPosition;
         for (name, map) in env.actions().joint_maps() {
             let map = map.ok_or_else(|| {
-                RlError::EnvMismatch(format!(
+                VecEnvError::Mismatch(format!(
                     "action term `{name}` does not drive joints directly; the black-box \
                      wrapper needs `joint_position` or `joint_effort` actions"
                 ))
@@ -331,7 +235,7 @@ impl BlackBoxEnv {
         }
         env.reset()?;
         let width = env.observation("policy").map(|(_, w)| w).ok_or_else(|| {
-            RlError::EnvMismatch("the env has no `policy` observation group".into())
+            VecEnvError::Mismatch("the env has no `policy` observation group".into())
         })?;
         let ranges = cfg.context.clone().unwrap_or_else(|| vec![(0, width)]);
         let mut context = Vec::new();
@@ -387,7 +291,7 @@ impl BlackBoxEnv {
         text: &str,
         file_name: &str,
         overrides: &[String],
-    ) -> Result<Self, RlError> {
+    ) -> Result<Self, VecEnvError> {
         let doc = orbit_core::config::parse_document(text, file_name, overrides)?;
         Self::from_document(env, &doc)
     }
@@ -398,13 +302,13 @@ impl BlackBoxEnv {
         env: ManagerBasedRlEnv,
         path: &std::path::Path,
         overrides: &[String],
-    ) -> Result<Self, RlError> {
+    ) -> Result<Self, VecEnvError> {
         let doc = orbit_managers::load_config(path, overrides)?;
         Self::from_document(env, &doc)
     }
 
     /// Wraps `env` with the black-box config document `doc` (a loaded file, includes merged).
-    pub fn from_document(env: ManagerBasedRlEnv, doc: &Node) -> Result<Self, RlError> {
+    pub fn from_document(env: ManagerBasedRlEnv, doc: &Node) -> Result<Self, VecEnvError> {
         let cfg: BlackBoxCfg = orbit_core::config::from_node(doc)?;
         Self::new(env, cfg, &doc.span.file.display().to_string())
     }
@@ -511,7 +415,7 @@ impl VecEnv for BlackBoxEnv {
     }
 
     /// Runs one segment (the whole episode without replanning) of every env's trajectory.
-    fn step(&mut self, params: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
+    fn step(&mut self, params: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         let (n, dof) = (self.env.num_envs(), self.joints.len());
         let max_len = self.env.max_episode_length();
         if let Some(e) = self
@@ -520,7 +424,7 @@ impl VecEnv for BlackBoxEnv {
             .iter()
             .position(|&l| l != self.steps_done)
         {
-            return Err(RlError::EnvMismatch(format!(
+            return Err(VecEnvError::Mismatch(format!(
                 "env {e} is at step {} of its episode, the others at {}; black-box envs run \
                  in lockstep (do not step the wrapped env directly)",
                 self.env.episode_length()[e],
@@ -562,7 +466,7 @@ impl VecEnv for BlackBoxEnv {
             let episode_end = last_segment && k + 1 == length;
             let ended = |e: usize| r.terminated[e] || r.time_outs[e];
             if let Some(e) = (0..n).find(|&e| ended(e) != episode_end) {
-                return Err(RlError::EnvMismatch(format!(
+                return Err(VecEnvError::Mismatch(format!(
                     "env {e} {} its episode at step {} of {max_len}; the black-box wrapper \
                      needs every episode to end by its time-out",
                     if episode_end { "did not end" } else { "ended" },
@@ -603,8 +507,8 @@ impl VecEnv for BlackBoxEnv {
         })
     }
 
-    fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), RlError> {
-        Err(RlError::EnvMismatch(
+    fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), VecEnvError> {
+        Err(VecEnvError::Mismatch(
             "black-box envs run their episodes in lockstep; set `init_at_random_ep_len: false` \
              in the runner config"
                 .into(),

@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 use orbit_core::rng::EnvRng;
 use orbit_managers::{ManagerBasedRlEnv, StepTimings};
 
-use crate::{RlError, streams};
+use orbit_core::rng::streams;
+
+use crate::VecEnvError;
 
 /// What one step of a vectorised env returns.
 pub struct VecEnvStep<'a> {
@@ -42,10 +44,10 @@ pub trait VecEnv {
     /// `critic` group).
     fn critic_observations(&self) -> &[f32];
     /// Applies one action per env and advances one step.
-    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError>;
+    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError>;
     /// Moves every env to a random step of its episode (uniform in `[0, max_episode_length)`),
     /// drawn from `seed`, so that time-outs spread out.
-    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError>;
+    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), VecEnvError>;
     /// Wall-clock time of each phase of the env's steps so far, if the env measures it.
     fn step_timings(&self) -> Option<StepTimings> {
         None
@@ -82,11 +84,11 @@ impl<E: VecEnv + ?Sized> VecEnv for Box<E> {
         (**self).critic_observations()
     }
 
-    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
+    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         (**self).step(actions)
     }
 
-    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError> {
+    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), VecEnvError> {
         (**self).randomize_episode_lengths(seed)
     }
 
@@ -107,10 +109,10 @@ pub struct RlVecEnv {
 
 impl RlVecEnv {
     /// Wraps and resets `env`.
-    pub fn new(mut env: ManagerBasedRlEnv) -> Result<Self, RlError> {
+    pub fn new(mut env: ManagerBasedRlEnv) -> Result<Self, VecEnvError> {
         env.reset()?;
         let num_obs = env.observation("policy").map(|(_, d)| d).ok_or_else(|| {
-            RlError::EnvMismatch("the env has no `policy` observation group".into())
+            VecEnvError::Mismatch("the env has no `policy` observation group".into())
         })?;
         let num_critic_obs = env.observation("critic").map_or(num_obs, |(_, d)| d);
         Ok(Self {
@@ -166,7 +168,7 @@ impl VecEnv for RlVecEnv {
             .0
     }
 
-    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, RlError> {
+    fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         let r = self.env.step(actions)?;
         let mut any_done = false;
         for ((d, &t), &o) in self.dones.iter_mut().zip(r.terminated).zip(r.time_outs) {
@@ -186,7 +188,7 @@ impl VecEnv for RlVecEnv {
         })
     }
 
-    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), RlError> {
+    fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), VecEnvError> {
         let max = self.env.max_episode_length();
         let lengths: Vec<u32> = (0..self.num_envs())
             .map(|e| {
