@@ -110,3 +110,24 @@ async fn create() -> Result<Gpu, String> {
         pipelines: Mutex::new(HashMap::new()),
     })
 }
+
+/// For tests: whether a GPU is available. Without one it prints `SKIPPED: …` and returns
+/// false, unless `ORBIT_REQUIRE_GPU=1` (set by `.ci/run`), which makes a missing GPU a panic.
+pub fn gpu_available_for_tests() -> bool {
+    match gpu() {
+        Ok(gpu) => {
+            eprintln!(
+                "wgpu adapter: {} ({:?})",
+                gpu.info.name, gpu.info.device_type
+            );
+            true
+        }
+        Err(e) if std::env::var("ORBIT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("ORBIT_REQUIRE_GPU=1 but no GPU: {e}")
+        }
+        Err(e) => {
+            eprintln!("SKIPPED: no Vulkan adapter for the wgpu backend: {e}");
+            false
+        }
+    }
+}

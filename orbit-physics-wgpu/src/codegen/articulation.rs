@@ -1,0 +1,315 @@
+//! Articulation dynamics as straight-line code: forward kinematics, bias forces (RNEA), the
+//! mass matrix (CRBA), its Cholesky factorisation and the drives' velocity update.
+
+use std::fmt::Write as _;
+
+use orbit_core::scene::JointKind;
+
+use super::{Gen, f, m3, q4, v3};
+
+impl Gen<'_> {
+    /// Forward kinematics, joint motion subspaces, link velocities and spatial inertias.
+    pub(super) fn kinematics(&mut self) {
+        self.line(
+            "// Forward kinematics, joint motion subspaces, link spatial inertias and velocities.",
+        );
+        self.open("fn kinematics()");
+        for (l, link) in self.scene.links.iter().enumerate() {
+            let Some(p) = link.parent else {
+                // A root is welded to the env frame: a constant pose, at rest.
+                self.line(format!("lpos[{l}] = {};", v3(link.origin.pos)));
+                self.line(format!("lrot[{l}] = {};", q4(link.origin.rot)));
+                self.line(format!("vw[{l}] = vec3<f32>(0.0);"));
+                self.line(format!("vu[{l}] = vec3<f32>(0.0);"));
+                continue;
+            };
+            let d = link.dof.expect("non-root links have a dof");
+            self.open("");
+            self.line(format!(
+                "var pos = lpos[{p}] + qrot(lrot[{p}], {});",
+                v3(link.origin.pos)
+            ));
+            self.line(format!(
+                "var rot = qmul(lrot[{p}], {});",
+                q4(link.origin.rot)
+            ));
+            self.line(format!("let axis_w = qrot(rot, {});", v3(link.axis)));
+            if link.kind == JointKind::Prismatic {
+                self.line(format!("pos = pos + axis_w * q[{d}];"));
+                self.line(format!("sw[{l}] = vec3<f32>(0.0);"));
+                self.line(format!("su[{l}] = axis_w;"));
+            } else {
+                self.line(format!(
+                    "rot = qmul(rot, qaxis({}, q[{d}]));",
+                    v3(link.axis)
+                ));
+                self.line(format!("sw[{l}] = axis_w;"));
+                self.line(format!("su[{l}] = cross(pos, axis_w);"));
+            }
+            self.line(format!("lpos[{l}] = pos;"));
+            self.line(format!("lrot[{l}] = rot;"));
+            self.line(format!("vw[{l}] = vw[{p}] + sw[{l}] * qd[{d}];"));
+            self.line(format!("vu[{l}] = vu[{p}] + su[{l}] * qd[{d}];"));
+            self.line("// Spatial inertia at the env origin.");
+            let i = &link.inertial;
+            self.line(format!("let s = mscale[{l}];"));
+            self.line(format!("let m = {} * s;", f(i.mass)));
+            self.line(format!("let c = pos + qrot(rot, {});", v3(i.com)));
+            self.line("let r = qmat(rot);");
+            self.line(format!(
+                "let ic = r * ({} * s) * transpose(r);",
+                m3(i.inertia)
+            ));
+            self.line("let cc = dot(c, c);");
+            self.line(format!("im[{l}] = m;"));
+            self.line(format!("ih[{l}] = m * c;"));
+            self.line(format!(
+                "ij[{l}] = ic + m * (mat3x3<f32>(cc, 0.0, 0.0, 0.0, cc, 0.0, 0.0, 0.0, cc) - outer(c, c));"
+            ));
+            self.close();
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// Non-root links with their parent (`None` when the parent is a root) and dof.
+    fn moving_links(&self) -> Vec<(usize, Option<usize>, usize)> {
+        let links = &self.scene.links;
+        links
+            .iter()
+            .enumerate()
+            .filter_map(|(l, link)| {
+                let p = link.parent?;
+                let moving_parent = links[p].parent.is_some().then_some(p);
+                Some((
+                    l,
+                    moving_parent,
+                    link.dof.expect("non-root links have a dof"),
+                ))
+            })
+            .collect()
+    }
+
+    /// Bias forces c(q, q̇) by recursive Newton–Euler with q̈ = 0 (gravity as a base
+    /// acceleration of the roots).
+    pub(super) fn rnea_bias(&mut self) {
+        self.line("// Bias forces c(q, q̇) by recursive Newton–Euler with q̈ = 0 (gravity as a base acceleration).");
+        self.open("fn rnea_bias()");
+        let moving = self.moving_links();
+        for &(l, p, d) in &moving {
+            let (aw0, au0) = match p {
+                Some(p) => (format!("aw{p}"), format!("au{p}")),
+                None => ("vec3<f32>(0.0)".into(), "-GRAVITY".into()),
+            };
+            self.line("// (v × S) q̇ with the motion cross product; f = I a + v ×* (I v).");
+            self.line(format!(
+                "let aw{l} = {aw0} + cross(vw[{l}], sw[{l}]) * qd[{d}];"
+            ));
+            self.line(format!(
+                "let au{l} = {au0} + (cross(vw[{l}], su[{l}]) + cross(vu[{l}], sw[{l}])) * qd[{d}];"
+            ));
+            self.line(format!(
+                "let ivw{l} = ij[{l}] * vw[{l}] + cross(ih[{l}], vu[{l}]);"
+            ));
+            self.line(format!(
+                "let ivu{l} = im[{l}] * vu[{l}] - cross(ih[{l}], vw[{l}]);"
+            ));
+            self.line(format!(
+                "var fw{l} = ij[{l}] * aw{l} + cross(ih[{l}], au{l}) + cross(vw[{l}], ivw{l}) + cross(vu[{l}], ivu{l});"
+            ));
+            self.line(format!(
+                "var fu{l} = im[{l}] * au{l} - cross(ih[{l}], aw{l}) + cross(vw[{l}], ivu{l});"
+            ));
+        }
+        for &(l, p, d) in moving.iter().rev() {
+            self.line(format!(
+                "bias[{d}] = dot(sw[{l}], fw{l}) + dot(su[{l}], fu{l});"
+            ));
+            if let Some(p) = p {
+                self.line(format!("fw{p} = fw{p} + fw{l};"));
+                self.line(format!("fu{p} = fu{p} + fu{l};"));
+            }
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// The joint-space mass matrix by the composite-rigid-body algorithm, plus armature.
+    pub(super) fn crba(&mut self) {
+        self.line("// Joint-space mass matrix (lower triangle) by the composite-rigid-body algorithm, plus armature.");
+        self.open("fn crba()");
+        let moving = self.moving_links();
+        for &(l, _, _) in &moving {
+            self.line(format!("var cm{l} = im[{l}];"));
+            self.line(format!("var ch{l} = ih[{l}];"));
+            self.line(format!("var cj{l} = ij[{l}];"));
+        }
+        for &(l, p, _) in moving.iter().rev() {
+            if let Some(p) = p {
+                self.line(format!("cm{p} = cm{p} + cm{l};"));
+                self.line(format!("ch{p} = ch{p} + ch{l};"));
+                self.line(format!("cj{p} = cj{p} + cj{l};"));
+            }
+        }
+        let nd = self.nd();
+        let mut set = vec![false; nd * nd];
+        for &(l, _, di) in &moving {
+            self.line(format!(
+                "let fw{l} = cj{l} * sw[{l}] + cross(ch{l}, su[{l}]);"
+            ));
+            self.line(format!(
+                "let fu{l} = cm{l} * su[{l}] - cross(ch{l}, sw[{l}]);"
+            ));
+            for (j, dj) in self.chain(l) {
+                self.line(format!(
+                    "amat[{}] = dot(sw[{j}], fw{l}) + dot(su[{j}], fu{l});",
+                    di * nd + dj
+                ));
+                set[di * nd + dj] = true;
+            }
+        }
+        // Dofs of one articulation off each other's chain: structural zeros of the factor's
+        // dense block. Entries across articulations are never read.
+        for i in 0..nd {
+            let (d0, _) = self.dof_block(i);
+            for j in d0..i {
+                if !set[i * nd + j] {
+                    self.line(format!("amat[{}] = 0.0;", i * nd + j));
+                }
+            }
+        }
+        for (d, dof) in self.scene.dofs.iter().enumerate() {
+            if dof.armature != 0.0 {
+                self.line(format!(
+                    "amat[{}] = amat[{}] + {};",
+                    d * nd + d,
+                    d * nd + d,
+                    f(dof.armature)
+                ));
+            }
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// In-place Cholesky factorisation A = L Lᵀ (each articulation's dense block) and the
+    /// solve A x = b with it.
+    pub(super) fn cholesky(&mut self) {
+        let nd = self.nd();
+        let at = |i: usize, j: usize| format!("amat[{}]", i * nd + j);
+        self.line("// In-place Cholesky factorisation A = L Lᵀ of each articulation's block (lower triangle of amat).");
+        self.open("fn cholesky()");
+        for j in 0..nd {
+            let (d0, n) = self.dof_block(j);
+            let mut s = at(j, j);
+            for k in d0..j {
+                write!(s, " - {} * {}", at(j, k), at(j, k)).expect("write to string");
+            }
+            self.line(format!("{} = sqrt(max({s}, 1e-12));", at(j, j)));
+            self.line(format!("linv[{j}] = 1.0 / {};", at(j, j)));
+            for i in j + 1..d0 + n {
+                let mut t = at(i, j);
+                for k in d0..j {
+                    write!(t, " - {} * {}", at(i, k), at(j, k)).expect("write to string");
+                }
+                self.line(format!("{} = ({t}) * linv[{j}];", at(i, j)));
+            }
+        }
+        self.close();
+        self.line("");
+        self.line("// Solves A x = b in place with the Cholesky factor.");
+        self.open("fn chol_solve(b: ptr<function, array<f32, ND1>>)");
+        for i in 0..nd {
+            let (d0, _) = self.dof_block(i);
+            let mut t = format!("(*b)[{i}]");
+            for k in d0..i {
+                write!(t, " - {} * (*b)[{k}]", at(i, k)).expect("write to string");
+            }
+            self.line(format!("(*b)[{i}] = ({t}) * linv[{i}];"));
+        }
+        for i in (0..nd).rev() {
+            let (d0, n) = self.dof_block(i);
+            let mut t = format!("(*b)[{i}]");
+            for k in i + 1..d0 + n {
+                write!(t, " - {} * (*b)[{k}]", at(k, i)).expect("write to string");
+            }
+            self.line(format!("(*b)[{i}] = ({t}) * linv[{i}];"));
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// Drives and damping: A = M + h(D + d) + h²K and the unconstrained velocity update.
+    pub(super) fn drives(&mut self) {
+        let nd = self.nd();
+        self.line(
+            "// Drives and damping: A = M + h(D + d) + h²K and the unconstrained velocity update.",
+        );
+        self.open("fn drives()");
+        self.line("var dv: array<f32, ND1>;");
+        for (d, dof) in self.scene.dofs.iter().enumerate() {
+            let (k, dd, lim, damp) = (
+                dof.stiffness,
+                dof.drive_damping,
+                dof.effort_limit,
+                dof.damping,
+            );
+            let diag = format!("amat[{}]", d * nd + d);
+            self.open("");
+            self.line(format!("var ef = in_ef[{d}];"));
+            self.line(format!("if in_comp[{d}] {{ ef += bias[{d}]; }}"));
+            if k > 0.0 || dd > 0.0 {
+                self.line(format!("let qt = in_qt[{d}];"));
+                self.line(format!("let vt = in_vt[{d}];"));
+                self.line(format!(
+                    "let pd = {} * (qt - q[{d}]) + {} * (vt - qd[{d}]);",
+                    f(k),
+                    f(dd)
+                ));
+                self.line("var tau: f32;");
+                self.line("// Implicit while the drive stays inside its effort limit.");
+                self.open(format!("if abs(pd + ef) <= {}", f(lim)));
+                self.line(format!(
+                    "tau = ef + {} * (qt - q[{d}] - DT * qd[{d}]) + {} * (vt - qd[{d}]);",
+                    f(k),
+                    f(dd)
+                ));
+                self.line(format!(
+                    "{diag} = {diag} + DT * {} + DT * DT * {};",
+                    f(dd + damp),
+                    f(k)
+                ));
+                self.close();
+                self.open("else");
+                self.line(format!("tau = clamp(pd + ef, {}, {});", f(-lim), f(lim)));
+                if damp != 0.0 {
+                    self.line(format!("{diag} = {diag} + DT * {};", f(damp)));
+                }
+                self.close();
+                self.line(format!(
+                    "applied[{d}] = clamp(pd + ef, {}, {});",
+                    f(-lim),
+                    f(lim)
+                ));
+            } else {
+                self.line(format!("let tau = clamp(ef, {}, {});", f(-lim), f(lim)));
+                self.line(format!("applied[{d}] = tau;"));
+                if damp != 0.0 {
+                    self.line(format!("{diag} = {diag} + DT * {};", f(damp)));
+                }
+            }
+            self.line(format!(
+                "dv[{d}] = DT * (tau - {} * qd[{d}] - bias[{d}]);",
+                f(damp)
+            ));
+            self.close();
+        }
+        self.line("cholesky();");
+        self.line("chol_solve(&dv);");
+        for d in 0..nd {
+            self.line(format!("qd[{d}] += dv[{d}];"));
+        }
+        self.close();
+        self.line("");
+    }
+}

@@ -1,0 +1,135 @@
+//! Constraint rows: the narrow phase's view of the body poses, the rows' Jacobians and arm
+//! terms, and joint-limit rows.
+
+use std::fmt::Write as _;
+
+use super::{Gen, f};
+
+impl Gen<'_> {
+    /// The narrow phase's view of the bodies: their poses copied into arrays that the
+    /// data-driven pair loop of `step.wgsl` indexes at run time, so that the articulation's
+    /// own arrays keep constant indices.
+    pub(super) fn collide(&mut self) {
+        let s = self.scene;
+        let geo = s.geometry_table();
+        let c = |g: &mut Self, name: &str, v: usize| g.line(format!("const {name} = {v}u;"));
+        c(self, "GEO_LEN", geo.data.len().max(1));
+        c(self, "GEO_SHAPES", geo.shapes);
+        c(self, "GEO_BODIES", geo.bodies);
+        c(self, "GEO_GROUPS", geo.groups);
+        c(self, "GEO_PAIRS", geo.pairs);
+        c(self, "NG", geo.num_groups);
+        self.line("// Body poses for the narrow phase (links, then free objects).");
+        self.open("fn copy_body_poses()");
+        let nl = s.links.len();
+        for b in 0..s.num_bodies() {
+            if s.is_fixed_body(b) || !s.shapes.iter().any(|x| x.body == Some(b)) {
+                continue;
+            }
+            let (pos, rot) = if b < nl {
+                (format!("lpos[{b}]"), format!("lrot[{b}]"))
+            } else {
+                (format!("opos[{}]", b - nl), format!("orot[{}]", b - nl))
+            };
+            self.line(format!("bpos[{b}] = {pos};"));
+            self.line(format!("brot[{b}] = {rot};"));
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// Row Jacobians of points on links, and the arm parts of the rows.
+    pub(super) fn jacobians(&mut self) {
+        let nd = self.nd();
+        self.line("// Adds s times the generalised-force direction of a unit impulse along d at p on body b to jt;");
+        self.line("// false if b moves no dof.");
+        self.open("fn body_jt(b: i32, p: vec3<f32>, d: vec3<f32>, s: f32, jt: ptr<function, array<f32, ND1>>) -> bool");
+        self.line("let pd = cross(p, d);");
+        self.open("switch b");
+        for l in 0..self.scene.links.len() {
+            let chain = self.chain(l);
+            if chain.is_empty() || !self.scene.shapes.iter().any(|s| s.body == Some(l)) {
+                continue;
+            }
+            self.open(format!("case {l}:"));
+            for (k, d) in chain {
+                self.line(format!(
+                    "(*jt)[{d}] += s * (dot(d, su[{k}]) + dot(sw[{k}], pd));"
+                ));
+            }
+            self.line("return true;");
+            self.close();
+        }
+        self.line("default: {}");
+        self.close();
+        self.line("return false;");
+        self.close();
+        self.line("");
+        self.line("// Stores a row's arm Jacobian and W = A⁻¹ Jᵀ at `base`; returns J W.");
+        self.open("fn arm_store(base: u32, jt: array<f32, ND1>, w: array<f32, ND1>) -> f32");
+        let mut jw = String::from("0.0");
+        for d in 0..nd {
+            self.line(format!("r_j[base + {d}u] = jt[{d}];"));
+            self.line(format!("r_w[base + {d}u] = w[{d}];"));
+            write!(jw, " + jt[{d}] * w[{d}]").expect("write to string");
+        }
+        self.line(format!("return {jw};"));
+        self.close();
+        self.line("");
+        self.line("// J_arm q̇ of the row at `base`.");
+        self.open("fn arm_dot(base: u32) -> f32");
+        let mut dot = String::from("0.0");
+        for d in 0..nd {
+            write!(dot, " + r_j[base + {d}u] * qd[{d}]").expect("write to string");
+        }
+        self.line(format!("return {dot};"));
+        self.close();
+        self.line("");
+        self.line("// q̇ += W x for the row at `base`.");
+        self.open("fn arm_axpy(base: u32, x: f32)");
+        for d in 0..nd {
+            self.line(format!("qd[{d}] += r_w[base + {d}u] * x;"));
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// Joint-limit rows for joints that could reach a limit within this substep.
+    pub(super) fn limit_rows(&mut self) {
+        self.line("// A limit row when the joint could reach its limit within this substep.");
+        self.open("fn limit_rows()");
+        for (d, dof) in self.scene.dofs.iter().enumerate() {
+            let (lower, upper) = (dof.lower.is_finite(), dof.upper.is_finite());
+            if !lower && !upper {
+                continue;
+            }
+            self.open("");
+            self.line(format!("let reach = abs(qd[{d}]) * DT + MARGIN;"));
+            self.line("var jt: array<f32, ND1>;");
+            if lower {
+                self.line(format!("let lo = q[{d}] - {};", f(dof.lower)));
+            }
+            if upper {
+                self.line(format!("let hi = {} - q[{d}];", f(dof.upper)));
+            }
+            if lower {
+                self.open("if lo < reach");
+                self.line(format!("jt[{d}] = 1.0;"));
+                self.line(format!("limit_row(jt, LIMIT_SLOT + {}u, lo);", 2 * d));
+            }
+            if upper {
+                if lower {
+                    self.reopen("else if hi < reach");
+                } else {
+                    self.open("if hi < reach");
+                }
+                self.line(format!("jt[{d}] = -1.0;"));
+                self.line(format!("limit_row(jt, LIMIT_SLOT + {}u, hi);", 2 * d + 1));
+            }
+            self.close();
+            self.close();
+        }
+        self.close();
+        self.line("");
+    }
+}

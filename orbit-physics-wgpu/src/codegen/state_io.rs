@@ -1,0 +1,96 @@
+//! The state buffer's loads and stores: `load_state`, `load_applied` and `publish`, with every
+//! address a constant of the scene's layout.
+
+use super::{Gen, v3};
+
+impl Gen<'_> {
+    /// `(articulation dofs, links, local link index)` of every link, for buffer addresses.
+    fn link_strides(&self) -> Vec<(usize, usize, usize)> {
+        let mut out = Vec::new();
+        for &(_, links, _, dofs) in &self.scene.articulations {
+            out.extend((0..links).map(|i| (dofs, links, i)));
+        }
+        out
+    }
+
+    pub(super) fn state_io(&mut self) {
+        let s = self.scene;
+        let strides = self.link_strides();
+        let (nl, nd) = (s.links.len(), s.dofs.len());
+        let stride = |d: usize| self.dof_block(d).1;
+        let dof_strides: Vec<usize> = (0..nd).map(stride).collect();
+
+        self.open("fn load_state()");
+        for (d, st) in dof_strides.iter().enumerate() {
+            self.line(format!("q[{d}] = st[dof_addr(0u, {d}u, {st}u)];"));
+            self.line(format!("qd[{d}] = st[dof_addr(1u, {d}u, {st}u)];"));
+        }
+        for b in 0..s.num_bodies() {
+            self.line(format!(
+                "mscale[{b}] = inp[lay[LAY_IN_MASS_SCALE] + env * NB + {b}u];"
+            ));
+        }
+        self.line("// Drive inputs hold for the whole dispatch.");
+        for (d, dof) in s.dofs.iter().enumerate() {
+            let st = dof_strides[d];
+            self.line(format!("in_ef[{d}] = inp[inp_addr(2u, {d}u, {st}u)];"));
+            self.line(format!(
+                "in_comp[{d}] = inp[lay[LAY_IN_COMPENSATE] + {d}u] != 0.0;"
+            ));
+            if dof.stiffness > 0.0 || dof.drive_damping > 0.0 {
+                self.line(format!("in_qt[{d}] = inp[inp_addr(0u, {d}u, {st}u)];"));
+                self.line(format!("in_vt[{d}] = inp[inp_addr(1u, {d}u, {st}u)];"));
+            }
+        }
+        for (o, obj) in s.objects.iter().enumerate() {
+            self.line(format!("opos[{o}] = ld3(obj_addr(0u, {o}u));"));
+            self.line(format!("orot[{o}] = normalize(ld4(obj_addr(1u, {o}u)));"));
+            self.line(format!("oang[{o}] = ld3(obj_addr(3u, {o}u));"));
+            self.line(
+                "// The state holds the origin's velocity; dynamics use the centre of mass's.",
+            );
+            self.line(format!(
+                "ovel[{o}] = ld3(obj_addr(2u, {o}u)) + cross(oang[{o}], qrot(orot[{o}], {}));",
+                v3(obj.com)
+            ));
+        }
+        self.close();
+
+        self.open("fn load_applied()");
+        for (d, st) in dof_strides.iter().enumerate() {
+            self.line(format!("applied[{d}] = st[dof_addr(3u, {d}u, {st}u)];"));
+        }
+        self.close();
+
+        self.open("fn publish()");
+        self.line("kinematics();");
+        self.line("rnea_bias();");
+        for (d, st) in dof_strides.iter().enumerate() {
+            self.line(format!("st[dof_addr(0u, {d}u, {st}u)] = q[{d}];"));
+            self.line(format!("st[dof_addr(1u, {d}u, {st}u)] = qd[{d}];"));
+            self.line(format!("st[dof_addr(2u, {d}u, {st}u)] = bias[{d}];"));
+            self.line(format!("st[dof_addr(3u, {d}u, {st}u)] = applied[{d}];"));
+        }
+        for (l, &(_, links, local)) in strides.iter().enumerate().take(nl) {
+            let a = |k: u32| format!("link_addr({k}u, {l}u, {links}u, {local}u)");
+            self.line(format!("st3({}, lpos[{l}]);", a(0)));
+            self.line(format!("st4({}, lrot[{l}]);", a(1)));
+            self.line(format!(
+                "st3({}, vu[{l}] + cross(vw[{l}], lpos[{l}]));",
+                a(2)
+            ));
+            self.line(format!("st3({}, vw[{l}]);", a(3)));
+        }
+        for (o, obj) in s.objects.iter().enumerate() {
+            self.line(format!("st3(obj_addr(0u, {o}u), opos[{o}]);"));
+            self.line(format!("st4(obj_addr(1u, {o}u), orot[{o}]);"));
+            self.line(format!(
+                "st3(obj_addr(2u, {o}u), ovel[{o}] - cross(oang[{o}], qrot(orot[{o}], {})));",
+                v3(obj.com)
+            ));
+            self.line(format!("st3(obj_addr(3u, {o}u), oang[{o}]);"));
+        }
+        self.close();
+        self.line("");
+    }
+}
