@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Parser;
+use orbit::managers::managers::Manager;
 use orbit::managers::{ManagerBasedRlEnv, make_from_file};
 use orbit::train::{TrainArgs, train};
 
@@ -127,6 +128,10 @@ fn a_bundled_variant_resolves_its_includes() {
     // Fancy Gym's 28 values and the last action, the rod tip, the box's velocities and its
     // error to the target.
     assert_eq!(obs_dim(&env), 53);
+    // The variant's action term replaces none of the base's (the base has none); the command
+    // comes from the base.
+    assert_eq!(env.actions().active_terms(), ["arm"]);
+    assert_eq!(env.commands().active_terms(), ["target"]);
 }
 
 /// An include cycle and a missing include in a user's file are errors naming the file and

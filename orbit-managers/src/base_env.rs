@@ -5,6 +5,7 @@
 //! `step(action)`: process actions → `decimation` × (apply actions, physics step) → step
 //! counters += 1 → command timers → interval events → observations.
 
+use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use orbit_core::config::Node;
@@ -239,6 +240,11 @@ impl ManagerBasedEnv {
         Ok(())
     }
 
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
     /// Number of envs.
     pub fn num_envs(&self) -> usize {
         self.scene.num_envs()
@@ -296,33 +302,43 @@ impl ManagerBasedEnv {
         Ok(())
     }
 
-    /// Resets the listed envs: reset events, observation histories, actions, commands (their
-    /// metrics are written to `log`) and step counters.
+    /// Resets the listed envs: reset events, observation histories, actions, commands and step
+    /// counters (a base env keeps no episode log).
     pub fn reset_idx(&mut self, env_ids: &[usize]) -> Result<(), EnvError> {
         orbit_core::physics::check_env_ids(env_ids, self.num_envs())?;
-        self.reset_managers(env_ids, &mut Default::default())
+        self.reset_managers(env_ids)?;
+        Ok(())
     }
 
-    /// The reset of the listed (already checked) envs, logging command metrics.
+    /// The reset of the listed (already checked) envs: `Reset` events, the observation, action
+    /// and command managers, step counters; returns the managers' episode log (command metrics).
     pub(crate) fn reset_managers(
         &mut self,
         env_ids: &[usize],
-        log: &mut std::collections::BTreeMap<String, f32>,
-    ) -> Result<(), EnvError> {
+    ) -> Result<BTreeMap<String, f32>, EnvError> {
         self.events.apply(
             EventMode::Reset,
             &mut self.scene,
             env_ids,
             &mut self.event_rngs,
         )?;
-        self.observations.reset(env_ids);
-        self.actions.reset(env_ids);
-        self.commands
-            .reset(&self.scene, env_ids, &mut self.command_rngs, log);
+        let mut ctx = ResetContext {
+            scene: &self.scene,
+            command_rngs: &mut self.command_rngs,
+            episode_length_s: f32::INFINITY,
+        };
+        let mut log = BTreeMap::new();
+        for manager in [
+            &mut self.observations as &mut dyn Manager,
+            &mut self.actions,
+            &mut self.commands,
+        ] {
+            log.extend(manager.reset(env_ids, &mut ctx));
+        }
         for &e in env_ids {
             self.episode_length[e] = 0;
         }
-        Ok(())
+        Ok(log)
     }
 
     /// Advances every env by one env step; read the result with [`Self::observation`].

@@ -8,6 +8,7 @@
 //! observation belongs to its new episode).
 
 use std::collections::BTreeMap;
+use std::ops::Deref;
 use std::time::Instant;
 
 use orbit_core::config::Node;
@@ -63,6 +64,20 @@ pub struct StepResult<'a> {
     pub extras: &'a Extras,
 }
 
+/// An RL env is its base env plus rewards, terminations and curricula (Isaac Lab's
+/// `ManagerBasedRLEnv` subclasses `ManagerBasedEnv`), so the base's accessors (`scene`,
+/// `num_envs`, `action_dim`, `step_dt`, `episode_length`, `observation`, `commands`, `actions`,
+/// `timings`) work on it too. There is no `DerefMut`: the base's `step`, `reset` and `reset_idx`
+/// would skip rewards, terminations and logs, so mutable access goes through
+/// [`ManagerBasedRlEnv::scene_mut`] and [`ManagerBasedRlEnv::timings_mut`].
+impl Deref for ManagerBasedRlEnv {
+    type Target = ManagerBasedEnv;
+
+    fn deref(&self) -> &ManagerBasedEnv {
+        &self.base
+    }
+}
+
 impl ManagerBasedRlEnv {
     /// Builds the env from a config document (see [`RlEnvCfg`]).
     pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
@@ -113,39 +128,14 @@ impl ManagerBasedRlEnv {
         &self.base
     }
 
-    /// The scene.
-    pub fn scene(&self) -> &Scene {
-        &self.base.scene
-    }
-
     /// The scene, mutably (for scripted state changes between steps).
     pub fn scene_mut(&mut self) -> &mut Scene {
         &mut self.base.scene
     }
 
-    /// Number of envs.
-    pub fn num_envs(&self) -> usize {
-        self.base.num_envs()
-    }
-
-    /// Total action dimension.
-    pub fn action_dim(&self) -> usize {
-        self.base.action_dim()
-    }
-
     /// Episode length in env steps.
     pub fn max_episode_length(&self) -> u32 {
         self.base.max_episode_length
-    }
-
-    /// Env step duration in seconds.
-    pub fn step_dt(&self) -> f32 {
-        self.base.step_dt
-    }
-
-    /// Steps taken in each env's current episode.
-    pub fn episode_length(&self) -> &[u32] {
-        &self.base.episode_length
     }
 
     /// Sets the step counters of the running episodes, e.g. to random values so that
@@ -161,21 +151,6 @@ impl ManagerBasedRlEnv {
         }
         self.base.episode_length.copy_from_slice(lengths);
         Ok(())
-    }
-
-    /// The observation group `name`: `(values num_envs × dim, dim)`.
-    pub fn observation(&self, name: &str) -> Option<(&[f32], usize)> {
-        self.base.observation(name)
-    }
-
-    /// The command manager.
-    pub fn commands(&self) -> &CommandManager {
-        &self.base.commands
-    }
-
-    /// The action manager.
-    pub fn actions(&self) -> &ActionManager {
-        &self.base.actions
     }
 
     /// Installs (or, with `None`, removes) the observer called after every step; returns the
@@ -195,11 +170,6 @@ impl ManagerBasedRlEnv {
             .commands
             .debug_markers(&self.base.scene, env, &mut out);
         out
-    }
-
-    /// Time spent per step phase since construction or the last `timings_mut().clear()`.
-    pub fn timings(&self) -> &StepTimings {
-        &self.base.timings
     }
 
     /// Mutable access to the phase timings (to clear them after a warm-up).
@@ -224,20 +194,25 @@ impl ManagerBasedRlEnv {
     }
 
     /// Resets the listed envs (Isaac Lab `_reset_idx`): curriculum, reset events, observation
-    /// histories, logs (rewards, commands, terminations), episode counters.
+    /// histories, actions, commands, episode counters, then the logs of rewards, terminations
+    /// and curriculum (with the commands' metrics, they replace `extras.log`).
     pub fn reset_idx(&mut self, env_ids: &[usize]) -> Result<(), EnvError> {
         orbit_core::physics::check_env_ids(env_ids, self.num_envs())?;
-        let mut log = BTreeMap::new();
-        self.curriculum.compute(
-            env_ids,
-            self.base.common_step_counter,
-            &mut self.rewards,
-            &mut log,
-        )?;
-        self.base.reset_managers(env_ids, &mut log)?;
-        self.rewards
-            .reset(env_ids, self.cfg.episode_length_s, &mut log);
-        self.terminations.reset(env_ids, &mut log);
+        self.curriculum
+            .compute(env_ids, self.base.common_step_counter, &mut self.rewards)?;
+        let mut log = self.base.reset_managers(env_ids)?;
+        let mut ctx = ResetContext {
+            scene: &self.base.scene,
+            command_rngs: &mut self.base.command_rngs,
+            episode_length_s: self.cfg.episode_length_s,
+        };
+        for manager in [
+            &mut self.rewards as &mut dyn Manager,
+            &mut self.terminations,
+            &mut self.curriculum,
+        ] {
+            log.extend(manager.reset(env_ids, &mut ctx));
+        }
         self.extras.log = log;
         Ok(())
     }

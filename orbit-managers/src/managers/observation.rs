@@ -1,0 +1,238 @@
+//! The observation manager.
+
+use std::collections::BTreeMap;
+
+use orbit_core::config::Node;
+use orbit_core::parallel::MIN_ENVS_PER_TASK;
+use orbit_core::rng::EnvRng;
+use rayon::prelude::*;
+
+use super::{
+    ActionManager, CommandManager, Manager, ResetContext, before_concurrent_terms, context_after,
+};
+use crate::base_env::{EnvRngs, EnvView};
+use crate::cfg::{EnvCfg, NoiseCfg};
+use crate::error::EnvError;
+use crate::scene::Scene;
+use crate::term::{ObservationTerm, build_observation};
+
+struct ObsTerm {
+    name: String,
+    term: Box<dyn ObservationTerm>,
+    noise: Option<NoiseCfg>,
+    clip: Option<(f32, f32)>,
+    scale: Option<f32>,
+    buf: Vec<f32>,
+    /// History slots (0 = none): per env `history × dim` values, oldest first.
+    history: usize,
+    hist: Vec<f32>,
+    /// Envs whose next value fills the whole history (after a reset).
+    fresh: Vec<bool>,
+}
+
+impl ObsTerm {
+    /// Values per env in the group output.
+    fn out_dim(&self) -> usize {
+        self.term.dim() * self.history.max(1)
+    }
+}
+
+/// One observation group: its terms and the concatenated output.
+pub struct ObservationGroup {
+    /// Group name.
+    pub name: String,
+    terms: Vec<ObsTerm>,
+    /// Values per env.
+    pub dim: usize,
+    /// Concatenated observations, `num_envs × dim`.
+    pub values: Vec<f32>,
+}
+
+/// Computes observation groups: per term `func`, then noise, clip, scale; concatenated.
+pub struct ObservationManager {
+    pub(crate) groups: Vec<ObservationGroup>,
+}
+
+impl ObservationManager {
+    pub(crate) fn new(
+        doc: &Node,
+        scene: &Scene,
+        cfg: &EnvCfg,
+        actions: &ActionManager,
+        commands: &CommandManager,
+    ) -> Result<Self, EnvError> {
+        let n = scene.num_envs();
+        let mut groups = Vec::new();
+        for (gname, g) in &cfg.observations.0 {
+            let mut terms = Vec::new();
+            for (tname, t) in &g.terms.0 {
+                let ctx = context_after(
+                    doc,
+                    scene,
+                    cfg,
+                    format!("observations.{gname}.terms.{tname}"),
+                    actions,
+                    commands,
+                );
+                let term = build_observation(&t.func, &ctx)?;
+                let d = term.dim();
+                terms.push(ObsTerm {
+                    name: tname.clone(),
+                    term,
+                    noise: if g.enable_corruption { t.noise } else { None },
+                    clip: t.clip,
+                    scale: t.scale,
+                    buf: vec![0.0; n * d],
+                    history: t.history_length,
+                    hist: vec![0.0; n * d * t.history_length],
+                    fresh: vec![true; n],
+                });
+            }
+            let dim = terms.iter().map(|t| t.out_dim()).sum();
+            groups.push(ObservationGroup {
+                name: gname.clone(),
+                terms,
+                dim,
+                values: vec![0.0; n * dim],
+            });
+        }
+        Ok(Self { groups })
+    }
+
+    pub(crate) fn compute(&mut self, env: &EnvView<'_>, noise: &mut EnvRngs) {
+        before_concurrent_terms(env);
+        self.groups.par_iter_mut().for_each(|g| {
+            g.terms
+                .par_iter_mut()
+                .for_each(|t| t.term.compute(env, &mut t.buf));
+        });
+        // Noise draws follow term order within each env's stream: the terms go in order.
+        let streams = noise.streams_mut();
+        for g in &mut self.groups {
+            let (dim, terms) = (g.dim, &mut g.terms);
+            let mut offset = 0;
+            let mut first = 0;
+            while first < terms.len() {
+                if terms[first].history > 0 {
+                    offset += terms[first].write_history(&mut g.values, dim, offset, streams);
+                    first += 1;
+                    continue;
+                }
+                // A run of terms without history: one pass over the envs writes them all.
+                let end = terms[first..]
+                    .iter()
+                    .position(|t| t.history > 0)
+                    .map_or(terms.len(), |k| first + k);
+                let run = &terms[first..end];
+                g.values
+                    .par_chunks_mut(dim)
+                    .zip(streams.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(MIN_ENVS_PER_TASK)
+                    .for_each(|(e, (out, rng))| {
+                        let mut column = offset;
+                        for t in run {
+                            let d = t.term.dim();
+                            let values = &mut out[column..column + d];
+                            values.copy_from_slice(&t.buf[e * d..(e + 1) * d]);
+                            corrupt(t.corruption(), rng, values);
+                            column += d;
+                        }
+                    });
+                offset += run.iter().map(ObsTerm::out_dim).sum::<usize>();
+                first = end;
+            }
+        }
+    }
+}
+
+impl ObsTerm {
+    /// Noise, clip and scale, as [`corrupt`] takes them.
+    fn corruption(&self) -> Corruption {
+        (self.noise, self.clip, self.scale)
+    }
+
+    /// Corrupts this term's fresh values, shifts them into its history and writes the history
+    /// (oldest first) into the group's columns from `offset`; returns the columns written.
+    fn write_history(
+        &mut self,
+        values: &mut [f32],
+        dim: usize,
+        offset: usize,
+        streams: &mut [EnvRng],
+    ) -> usize {
+        let (d, width, corruption) = (self.term.dim(), self.out_dim(), self.corruption());
+        if d == 0 {
+            return 0;
+        }
+        self.buf
+            .par_chunks_mut(d)
+            .zip(values.par_chunks_mut(dim))
+            .zip(streams.par_iter_mut())
+            .zip(self.hist.par_chunks_mut(width))
+            .zip(self.fresh.par_iter_mut())
+            .with_min_len(MIN_ENVS_PER_TASK)
+            .for_each(|((((row, out), rng), hist), fresh)| {
+                corrupt(corruption, rng, row);
+                if std::mem::replace(fresh, false) {
+                    hist.chunks_exact_mut(d)
+                        .for_each(|slot| slot.copy_from_slice(row));
+                } else {
+                    hist.copy_within(d.., 0);
+                    let last = hist.len() - d;
+                    hist[last..].copy_from_slice(row);
+                }
+                out[offset..offset + width].copy_from_slice(hist);
+            });
+        width
+    }
+}
+
+/// A term's noise, clip and scale.
+type Corruption = (Option<NoiseCfg>, Option<(f32, f32)>, Option<f32>);
+
+/// Adds a term's noise to one env's row, then clips and scales it (Isaac Lab's order).
+fn corrupt((noise, clip, scale): Corruption, rng: &mut EnvRng, row: &mut [f32]) {
+    if noise.is_none() && clip.is_none() && scale.is_none() {
+        return;
+    }
+    for v in row {
+        *v += match noise {
+            Some(NoiseCfg::Uniform { n_min, n_max }) => rng.uniform_range(n_min, n_max),
+            Some(NoiseCfg::Gaussian { mean, std }) => mean + std * rng.normal(),
+            None => 0.0,
+        };
+        if let Some((lo, hi)) = clip {
+            *v = v.clamp(lo, hi);
+        }
+        if let Some(s) = scale {
+            *v *= s;
+        }
+    }
+}
+
+impl Manager for ObservationManager {
+    /// Every group's terms as `<group>/<term>`, groups in config order.
+    fn active_terms(&self) -> Vec<String> {
+        self.groups
+            .iter()
+            .flat_map(|g| {
+                g.terms
+                    .iter()
+                    .map(move |t| format!("{}/{}", g.name, t.name))
+            })
+            .collect()
+    }
+
+    /// Marks the listed envs' histories to be refilled by their next value; logs nothing.
+    fn reset(&mut self, env_ids: &[usize], _: &mut ResetContext<'_>) -> BTreeMap<String, f32> {
+        for g in &mut self.groups {
+            for t in &mut g.terms {
+                for &e in env_ids {
+                    t.fresh[e] = true;
+                }
+            }
+        }
+        BTreeMap::new()
+    }
+}
