@@ -164,7 +164,13 @@ fn full_env(args: &Args, n: usize) -> Result<FullEnv, Box<dyn std::error::Error>
     })
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+// Errors are printed as their messages, not as debug structs.
+fn main() -> std::process::ExitCode {
+    orbit::init_logging();
+    orbit::exit_code(run())
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     let scene = orbit::assets::box_pushing_scene(&args.overrides)?;
     let sim = SimCfg {

@@ -21,6 +21,7 @@ struct Args {
 }
 
 fn main() -> std::process::ExitCode {
+    orbit::init_logging();
     orbit::exit_code(run(Args::parse()))
 }
 

@@ -11,5 +11,6 @@
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
+    orbit::init_logging();
     orbit::exit_code(orbit::train::play(&orbit::train::PlayArgs::parse()))
 }

@@ -16,7 +16,13 @@ struct Args {
     run_dirs: Vec<PathBuf>,
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+// Errors are printed as their messages, not as debug structs.
+fn main() -> std::process::ExitCode {
+    orbit::init_logging();
+    orbit::exit_code(run())
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     let segments = args
         .run_dirs

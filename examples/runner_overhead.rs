@@ -120,7 +120,13 @@ const CFG: &str = r#"(
     ),
 )"#;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+// Errors are printed as their messages, not as debug structs.
+fn main() -> std::process::ExitCode {
+    orbit::init_logging();
+    orbit::exit_code(run())
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     println!(
         "{} observations, {} actions, 24 steps per iteration, {} cores; ms per env step (median of {} iterations)",

@@ -13,8 +13,6 @@
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-        .init();
+    orbit::init_logging();
     orbit::exit_code(orbit::train::train(&orbit::train::TrainArgs::parse(), true))
 }

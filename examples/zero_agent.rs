@@ -6,6 +6,7 @@
 
 use clap::Parser;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    orbit::agent::run(&orbit::agent::AgentArgs::parse(), true)
+fn main() -> std::process::ExitCode {
+    orbit::init_logging();
+    orbit::exit_code(orbit::agent::run(&orbit::agent::AgentArgs::parse(), true))
 }

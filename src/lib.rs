@@ -29,6 +29,17 @@ pub fn make(
     managers::make(task, overrides)
 }
 
+/// Logs to standard error: warnings and errors by default (a dropped collision shape, a
+/// skipped run directory), more with `RUST_LOG` (e.g. `RUST_LOG=info`).
+pub fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .try_init();
+}
+
 /// The exit code of an example's `main`: success, or the error's message (not its debug
 /// form) on standard error and failure.
 pub fn exit_code<T>(result: Result<T, Box<dyn std::error::Error>>) -> std::process::ExitCode {

@@ -9,7 +9,7 @@ use orbit_core::config::Node;
 use orbit_render::VideoCfg;
 use orbit_rl::burn::tensor::Device;
 use orbit_rl::run_dir::{
-    ENV_CONFIG_FILE, PARAMS_DIR, checkpoint_env_config, new_run_dir, resolve_checkpoint,
+    ENV_CONFIG_FILE, PARAMS_DIR, checkpoint_env_config, create_run_dir, resolve_checkpoint,
 };
 
 /// The training config in a run's `params/` (`--agent-config` takes it back).
@@ -48,7 +48,8 @@ pub struct TrainArgs {
     /// `<log-root>/<experiment>/`; the last match (the newest run) is taken.
     #[arg(long, default_value = ".*")]
     pub load_run: String,
-    /// Checkpoint regex within the run (`model_<iteration>`); the highest iteration is taken.
+    /// Checkpoint regex within the run, matched against whole names (`model_<iteration>`:
+    /// `model_1` is iteration 1 only); the highest matching iteration is taken.
     #[arg(long, default_value = "model_.*")]
     pub checkpoint: String,
     /// Videos during training.
@@ -250,7 +251,6 @@ pub fn train(
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
     let run = resolve(args)?;
     let cfg = run.agent.clone();
-    let dir = new_run_dir(&args.log_root, &cfg.experiment_name, &cfg.run_name);
     let resume_from = if args.resume {
         Some(resolve_checkpoint(
             &args.log_root.join(&cfg.experiment_name),
@@ -260,7 +260,8 @@ pub fn train(
     } else {
         None
     };
-    std::fs::create_dir_all(&dir).map_err(RlError::io(&dir))?;
+    // Only once the configs and the checkpoint to resume are known to be good.
+    let dir = create_run_dir(&args.log_root, &cfg.experiment_name, &cfg.run_name)?;
     write_params(&dir, &run)?;
     let video = args.video.video.then(|| VideoCfg {
         dir: dir.join("videos").join("train"),

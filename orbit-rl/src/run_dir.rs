@@ -29,21 +29,53 @@ pub fn new_run_dir(log_root: &Path, experiment: &str, run_name: &str) -> PathBuf
     log_root.join(experiment).join(name)
 }
 
+/// Creates a new run directory named as [`new_run_dir`] says and returns it. A directory that
+/// exists is never reused: a run started in the same second as another gets the next free
+/// suffix (`…_2`, `…_3`), and the directory is created atomically, so two processes cannot
+/// both take one name.
+pub fn create_run_dir(
+    log_root: &Path,
+    experiment: &str,
+    run_name: &str,
+) -> Result<PathBuf, RlError> {
+    let first = new_run_dir(log_root, experiment, run_name);
+    let parent = first.parent().unwrap_or(log_root);
+    std::fs::create_dir_all(parent).map_err(RlError::io(parent))?;
+    for n in 1u32.. {
+        let dir = match n {
+            1 => first.clone(),
+            n => PathBuf::from(format!("{}_{n}", first.display())),
+        };
+        match std::fs::create_dir(&dir) {
+            Ok(()) => return Ok(dir),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => {
+                return Err(RlError::Io {
+                    path: dir,
+                    source: e,
+                });
+            }
+        }
+    }
+    unreachable!("some suffix is free")
+}
+
 /// Finds a checkpoint like RSL-RL's `get_checkpoint_path`: among the run directories of
 /// `experiment_dir` whose names start with a match of `load_run`, the last in alphabetical
-/// (= chronological) order; inside it, among the checkpoints whose name (`model_<it>`) starts
-/// with a match of `checkpoint`, the one with the highest iteration. Returns the checkpoint's
-/// path without extension.
+/// (= chronological) order that holds a checkpoint named by `checkpoint` (a regex matching the
+/// whole name `model_<it>`, so `model_1` is not `model_199`); in it, the one with the highest
+/// iteration. Newer matching runs without such a checkpoint (failed or interrupted runs) are
+/// skipped with a warning. Returns the checkpoint's path without extension.
 pub fn resolve_checkpoint(
     experiment_dir: &Path,
     load_run: &str,
     checkpoint: &str,
 ) -> Result<PathBuf, RlError> {
-    let pattern = |p: &str| {
-        Regex::new(&format!("^(?:{p})"))
+    let pattern = |p: &str, end: &str| {
+        Regex::new(&format!("^(?:{p}){end}"))
             .map_err(|e| RlError::checkpoint(experiment_dir, format!("invalid pattern `{p}`: {e}")))
     };
-    let (run_re, ckpt_re) = (pattern(load_run)?, pattern(checkpoint)?);
+    let (run_re, ckpt_re) = (pattern(load_run, "")?, pattern(checkpoint, "$")?);
     let list = |dir: &Path| -> Result<Vec<String>, RlError> {
         let mut names: Vec<String> = std::fs::read_dir(dir)
             .map_err(RlError::io(dir))?
@@ -52,27 +84,45 @@ pub fn resolve_checkpoint(
         names.sort();
         Ok(names)
     };
-    let run = list(experiment_dir)?
+    let runs: Vec<String> = list(experiment_dir)?
         .into_iter()
-        .rfind(|n| run_re.is_match(n) && experiment_dir.join(n).is_dir())
-        .ok_or_else(|| {
-            RlError::checkpoint(
-                experiment_dir,
-                format!("no run directory matches `{load_run}`"),
-            )
-        })?;
-    let run_dir = experiment_dir.join(run);
-    let mut checkpoints: Vec<String> = list(&run_dir)?
-        .into_iter()
-        .filter_map(|n| n.strip_suffix(".json").map(str::to_string))
-        .filter(|n| n.starts_with("model_") && ckpt_re.is_match(n))
+        .filter(|n| run_re.is_match(n) && experiment_dir.join(n).is_dir())
         .collect();
-    // Left-pad to 15 characters so `model_50` sorts before `model_100`.
-    checkpoints.sort_by_key(|n| format!("{n:0>15}"));
-    let last = checkpoints.pop().ok_or_else(|| {
-        RlError::checkpoint(&run_dir, format!("no checkpoint matches `{checkpoint}`"))
-    })?;
-    Ok(run_dir.join(last))
+    if runs.is_empty() {
+        return Err(RlError::checkpoint(
+            experiment_dir,
+            format!("no run directory matches `{load_run}`"),
+        ));
+    }
+    let mut skipped = Vec::new();
+    for run in runs.iter().rev() {
+        let run_dir = experiment_dir.join(run);
+        let mut checkpoints: Vec<String> = list(&run_dir)?
+            .into_iter()
+            .filter_map(|n| n.strip_suffix(".json").map(str::to_string))
+            .filter(|n| n.starts_with("model_") && ckpt_re.is_match(n))
+            .collect();
+        // Left-pad to 15 characters so `model_50` sorts before `model_100`.
+        checkpoints.sort_by_key(|n| format!("{n:0>15}"));
+        if let Some(last) = checkpoints.pop() {
+            if !skipped.is_empty() {
+                tracing::warn!(
+                    "skipped newer run directories without a checkpoint matching `{checkpoint}`: {}",
+                    skipped.join(", ")
+                );
+            }
+            return Ok(run_dir.join(last));
+        }
+        skipped.push(run.clone());
+    }
+    Err(RlError::checkpoint(
+        experiment_dir,
+        format!(
+            "no run directory matching `{load_run}` holds a checkpoint matching `{checkpoint}` \
+             (looked in {})",
+            runs.join(", ")
+        ),
+    ))
 }
 
 #[cfg(test)]
@@ -104,6 +154,42 @@ mod tests {
             err.to_string().contains("no run directory matches `1999`"),
             "{err}"
         );
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// `model_1` names model_1, not model_149 or model_10; a newer run without a checkpoint
+    /// (failed, interrupted, zero iterations) is skipped; no checkpoint anywhere is an error.
+    #[test]
+    fn checkpoint_names_match_whole_and_empty_runs_are_skipped() {
+        let root = std::env::temp_dir().join(format!("orbit-rl-run-skip-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let run = root.join("2026-01-01_00-00-00");
+        std::fs::create_dir_all(&run).unwrap();
+        for it in [1, 10, 149] {
+            std::fs::write(run.join(format!("model_{it}.json")), "{}").unwrap();
+        }
+        std::fs::create_dir_all(root.join("2026-01-02_00-00-00/params")).unwrap();
+        let got = resolve_checkpoint(&root, ".*", "model_1").unwrap();
+        assert_eq!(got, run.join("model_1"));
+        let got = resolve_checkpoint(&root, ".*", "model_1.*").unwrap();
+        assert_eq!(got, run.join("model_149"));
+        let err = resolve_checkpoint(&root, ".*", "model_2").unwrap_err();
+        assert!(err.to_string().contains("holds a checkpoint"), "{err}");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// Runs created in the same second get distinct directories, and none is reused.
+    #[test]
+    fn run_directories_are_never_reused() {
+        let root = std::env::temp_dir().join(format!("orbit-rl-run-new-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let dirs: Vec<PathBuf> = (0..3)
+            .map(|_| create_run_dir(&root, "exp", "a").unwrap())
+            .collect();
+        assert!(dirs.iter().all(|d| d.is_dir()));
+        assert!(dirs[0] != dirs[1] && dirs[1] != dirs[2] && dirs[0] != dirs[2]);
+        let entries = std::fs::read_dir(root.join("exp")).unwrap().count();
+        assert_eq!(entries, 3);
         std::fs::remove_dir_all(&root).unwrap();
     }
 }
