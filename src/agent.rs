@@ -25,6 +25,9 @@ pub struct AgentArgs {
 /// and throughput.
 pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error>> {
     crate::link_registrations();
+    if args.steps == 0 {
+        return Err("`--steps` must be at least 1: there is nothing to report of no steps".into());
+    }
     let e = &args.env;
     let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &args.overrides);
     let (mut env, name) =

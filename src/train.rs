@@ -348,6 +348,9 @@ impl EpisodeSummary {
 /// step's episode metrics, then the mean return and metrics over all played episodes.
 pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     crate::link_registrations();
+    if args.episodes == 0 {
+        return Err("`--episodes` must be at least 1 (episodes to play per env)".into());
+    }
     let overrides = split_overrides(&args.overrides);
     let configs = crate::RunConfigs::resolve(
         args.task.as_deref(),

@@ -213,21 +213,27 @@ impl RunnerCfg {
         if self.num_steps_per_env == 0 {
             return bad("num_steps_per_env", "must be at least 1".into());
         }
-        if a.num_mini_batches == 0 || a.num_learning_epochs == 0 {
+        if self.max_iterations == 0 {
             return bad(
-                "algorithm.num_mini_batches",
-                "epochs and minibatches must be at least 1".into(),
+                "max_iterations",
+                "must be at least 1 (a run of no iterations would train nothing)".into(),
             );
         }
+        if a.num_learning_epochs == 0 {
+            return bad("algorithm.num_learning_epochs", "must be at least 1".into());
+        }
+        if a.num_mini_batches == 0 {
+            return bad("algorithm.num_mini_batches", "must be at least 1".into());
+        }
         let positive = |x: f32| x > 0.0 && x.is_finite();
-        if !(positive(a.gamma) && a.gamma <= 1.0 && (0.0..=1.0).contains(&a.lam)) {
+        if !(positive(a.gamma) && a.gamma <= 1.0) {
             return bad(
                 "algorithm.gamma",
-                format!(
-                    "γ must be in (0, 1] and λ in [0, 1], got {} and {}",
-                    a.gamma, a.lam
-                ),
+                format!("must be in (0, 1], got {}", a.gamma),
             );
+        }
+        if !(0.0..=1.0).contains(&a.lam) {
+            return bad("algorithm.lam", format!("must be in [0, 1], got {}", a.lam));
         }
         if !(a.learning_rate > 0.0 && a.learning_rate.is_finite()) {
             return bad(
@@ -235,14 +241,14 @@ impl RunnerCfg {
                 format!("must be positive, got {}", a.learning_rate),
             );
         }
-        if ![a.clip_param, a.max_grad_norm, a.desired_kl]
-            .into_iter()
-            .all(positive)
-        {
-            return bad(
-                "algorithm.clip_param",
-                "clip_param, max_grad_norm and desired_kl must be positive".into(),
-            );
+        for (field, value) in [
+            ("algorithm.clip_param", a.clip_param),
+            ("algorithm.max_grad_norm", a.max_grad_norm),
+            ("algorithm.desired_kl", a.desired_kl),
+        ] {
+            if !positive(value) {
+                return bad(field, format!("must be positive, got {value}"));
+            }
         }
         if !positive(self.policy.init_noise_std) {
             return bad(
@@ -258,5 +264,48 @@ impl RunnerCfg {
             );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CFG: &str = "(num_steps_per_env: 24, max_iterations: 10, experiment_name: \"t\",
+        policy: (init_noise_std: 1.0, actor_hidden_dims: [8], critic_hidden_dims: [8], activation: Elu),
+        algorithm: (value_loss_coef: 1.0, use_clipped_value_loss: true, clip_param: 0.2,
+            entropy_coef: 0.0, num_learning_epochs: 5, num_mini_batches: 4, learning_rate: 1e-3,
+            schedule: Adaptive, gamma: 0.99, lam: 0.95, desired_kl: 0.01, max_grad_norm: 1.0))";
+
+    /// Each out-of-range value is blamed on its own field, with the value it had.
+    #[test]
+    fn validation_names_the_offending_field() {
+        assert!(RunnerCfg::from_ron(CFG, "t.ron", &[]).is_ok());
+        for (field, value) in [
+            ("desired_kl", "-0.01"),
+            ("max_grad_norm", "0.0"),
+            ("clip_param", "-0.2"),
+            ("lam", "1.5"),
+            ("gamma", "0.0"),
+            ("num_learning_epochs", "0"),
+            ("num_mini_batches", "0"),
+        ] {
+            let o = [format!("algorithm.{field}={value}")];
+            let message = RunnerCfg::from_ron(CFG, "t.ron", &o)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                message.starts_with(&format!("t.ron: field `algorithm.{field}`: ")),
+                "{field}: {message}"
+            );
+        }
+        let o = ["max_iterations=0".to_string()];
+        let message = RunnerCfg::from_ron(CFG, "t.ron", &o)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.starts_with("t.ron: field `max_iterations`: "),
+            "{message}"
+        );
     }
 }
