@@ -16,7 +16,7 @@ pub struct AgentArgs {
     /// Env steps to run.
     #[arg(long, default_value_t = 200)]
     pub steps: usize,
-    /// Config overrides `key.path=value`.
+    /// Config overrides `key.path=value` (or `env.key.path=value`, as `train` takes them).
     #[arg(long = "set")]
     pub overrides: Vec<String>,
 }
@@ -29,7 +29,13 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
         return Err("`--steps` must be at least 1: there is nothing to report of no steps".into());
     }
     let e = &args.env;
-    let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &args.overrides);
+    // One syntax everywhere: `train`'s `env.` prefix is accepted too.
+    let user: Vec<String> = args
+        .overrides
+        .iter()
+        .map(|o| o.strip_prefix("env.").unwrap_or(o).to_string())
+        .collect();
+    let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &user);
     let (mut env, name) =
         crate::make_env(args.task.as_deref(), e.task_config.as_deref(), &overrides)?;
     env.reset()?;

@@ -154,6 +154,7 @@ fn split_overrides(tokens: &[String]) -> Overrides {
 /// backend.
 pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     crate::link_registrations();
+    check_task(args.task.as_deref())?;
     let e = &args.env;
     let configs = crate::RunConfigs::resolve(
         args.task.as_deref(),
@@ -204,6 +205,21 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         env_overrides,
         black_box_overrides,
     })
+}
+
+/// Fails with the trainable tasks listed when `task` is given and not registered.
+fn check_task(task: Option<&str>) -> Result<(), RlError> {
+    match task {
+        Some(id) if orbit_managers::task(id).is_err() => Err(RlError::UnknownTask {
+            task: id.to_string(),
+            trainable: orbit_managers::tasks()
+                .into_iter()
+                .filter(|t| t.agent.is_some())
+                .map(|t| t.id.to_string())
+                .collect(),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// The training config of a run, or an error naming the trainable tasks.
@@ -351,6 +367,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     if args.episodes == 0 {
         return Err("`--episodes` must be at least 1 (episodes to play per env)".into());
     }
+    check_task(args.task.as_deref())?;
     let overrides = split_overrides(&args.overrides);
     let configs = crate::RunConfigs::resolve(
         args.task.as_deref(),

@@ -32,3 +32,34 @@ fn zero_iterations_steps_or_episodes_are_errors() {
     let message = play(&args).unwrap_err().to_string();
     assert!(message.contains("--episodes"), "{message}");
 }
+
+/// An unknown task is named as unknown by `train` and `play`, with the trainable tasks
+/// (black-box ones included, those without a training config left out).
+#[test]
+fn an_unknown_task_lists_the_trainable_tasks() {
+    let args = TrainArgs::parse_from(["train", "--task", "Foo-v0"]);
+    let message = train(&args, false).err().expect("an error").to_string();
+    assert!(message.starts_with("unknown task `Foo-v0`"), "{message}");
+    assert!(message.contains("BoxPushing-ProMP-Franka-v0"), "{message}");
+    assert!(!message.contains("TemporalSpatialSparse"), "{message}");
+    let args = PlayArgs::parse_from(["play", "--task", "Foo-v0"]);
+    let message = play(&args).unwrap_err().to_string();
+    assert!(message.starts_with("unknown task `Foo-v0`"), "{message}");
+}
+
+/// `random_agent --set` takes overrides with or without `train`'s `env.` prefix, alike.
+#[test]
+fn agent_overrides_take_the_env_prefix() {
+    for set in ["env.episode_length_s=0.04", "episode_length_s=0.04"] {
+        let args = AgentArgs::parse_from([
+            "random_agent",
+            "--num-envs",
+            "1",
+            "--steps",
+            "2",
+            "--set",
+            set,
+        ]);
+        run(&args, false).unwrap_or_else(|e| panic!("{set}: {e}"));
+    }
+}

@@ -35,6 +35,14 @@ pub enum RlError {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// The task named on the command line is not registered.
+    #[error("unknown task `{task}`; the tasks `train` can train: {trainable:?}")]
+    UnknownTask {
+        /// The name given.
+        task: String,
+        /// The registered tasks with a training config.
+        trainable: Vec<String>,
+    },
     /// A checkpoint is missing, unreadable or does not match the network.
     #[error("checkpoint {path}: {message}")]
     Checkpoint {
