@@ -83,3 +83,31 @@ fn a_massless_box_is_rejected() {
     assert!(e.contains("rigid_objects[0]"), "{e}");
     assert!(e.contains("positive mass"), "{e}");
 }
+
+/// Physically meaningless values are errors naming the field, the value and what is allowed:
+/// a negative shape mass (was turned into a 4 g box), a negative friction (was accepted), and
+/// a start outside a joint's limits (gave NaN rewards).
+#[test]
+fn physically_meaningless_values_are_errors() {
+    let e = error_of(&["rigid_objects[0].shape_masses[0]=-2.0"]);
+    assert!(
+        e.contains("rigid_objects[0].shape_masses[0]") && e.contains("-2"),
+        "{e}"
+    );
+    let e = error_of(&["rigid_objects[0].shapes[1].material.friction=-0.3"]);
+    assert!(
+        e.contains("rigid_objects[0].shapes[1].material.friction") && e.contains("-0.3"),
+        "{e}"
+    );
+    let e = error_of(&["static_objects[0].shapes[0].material.friction=-1.0"]);
+    assert!(
+        e.contains("static_objects[0].shapes[0].material.friction"),
+        "{e}"
+    );
+    let e = error_of(&[r#"articulations[0].init_state.joint_pos["panda_joint4"]=0.5"#]);
+    assert!(
+        e.contains("init_state.joint_pos") && e.contains("`panda_joint4`") && e.contains("0.5"),
+        "{e}"
+    );
+    assert!(e.contains("[-3.1416, 0.0873]"), "the URDF's limits: {e}");
+}

@@ -5,7 +5,7 @@ use glam::{Mat3, Vec3};
 use regex::Regex;
 
 use super::cfg::{ActuatorCfg, ArticulationCfg, AssetSource, PerJoint, RigidObjectCfg, SceneCfg};
-use super::model::{ArticulationModel, Geometry, Inertial, Joint, RigidBodyModel};
+use super::model::{ArticulationModel, Geometry, Inertial, Joint, RigidBodyModel, Shape};
 use crate::math::Pose;
 
 /// A pose plus linear and angular velocity of a body origin (world axes).
@@ -220,7 +220,7 @@ fn apply_by_name(
     joints: &[String],
     values: &std::collections::BTreeMap<String, f32>,
     out: &mut [f32],
-) -> Result<(), SceneError> {
+) -> Result<Vec<bool>, SceneError> {
     let mut seen = vec![false; joints.len()];
     for (pattern, &value) in values {
         for i in match_joints(
@@ -239,7 +239,7 @@ fn apply_by_name(
             out[i] = value;
         }
     }
-    Ok(())
+    Ok(seen)
 }
 
 /// Applies a [`PerJoint`] value to the selected joints.
@@ -307,6 +307,7 @@ impl SceneCfg {
             .iter()
             .enumerate()
             .map(|(i, s)| {
+                check_materials(&format!("scene.static_objects[{i}].shapes"), &s.shapes)?;
                 for shape in &s.shapes {
                     shape
                         .geometry
@@ -363,7 +364,7 @@ fn resolve_articulation(
 
     let mut default_joint_pos = vec![0.0; n];
     let mut default_joint_vel = vec![0.0; n];
-    apply_by_name(
+    let given_pos = apply_by_name(
         &format!("{field}.init_state.joint_pos"),
         entity,
         &joints,
@@ -385,6 +386,22 @@ fn resolve_articulation(
             .as_ref()
             .expect("dof link has a joint")
     };
+    // A start outside the joint's range is not a state the simulation can be in.
+    for (i, &q) in default_joint_pos.iter().enumerate() {
+        let range = asset_joint(i)
+            .limits
+            .unwrap_or([f32::NEG_INFINITY, f32::INFINITY]);
+        if given_pos[i] && !(q.is_finite() && q >= range[0] - 1e-6 && q <= range[1] + 1e-6) {
+            return Err(SceneError::Invalid {
+                field: format!("{field}.init_state.joint_pos"),
+                message: format!(
+                    "joint `{}` of `{entity}` starts at {q}, outside its limits [{}, {}]; \
+                     choose a position inside them",
+                    joints[i], range[0], range[1]
+                ),
+            });
+        }
+    }
     let mut drives: Vec<JointDrive> = (0..n)
         .map(|i| JointDrive {
             // As Isaac Lab 1.0 does for implicit actuators: the asset's effort limit is enforced
@@ -505,6 +522,18 @@ fn resolve_rigid_object(field: &str, cfg: &RigidObjectCfg) -> Result<RigidObject
             "a rigid object needs at least one shape".into(),
         ));
     }
+    check_materials(&format!("{field}.shapes"), &cfg.shapes)?;
+    if let Some((i, m)) = cfg
+        .shape_masses
+        .iter()
+        .enumerate()
+        .find(|(_, m)| !(m.is_finite() && **m > 0.0))
+    {
+        return Err(invalid(
+            &format!("shape_masses[{i}]"),
+            format!("must be a positive mass in kg, got {m}"),
+        ));
+    }
     for s in &cfg.shapes {
         s.geometry.validate().map_err(|m| invalid("shapes", m))?;
         if s.geometry == Geometry::Plane {
@@ -552,6 +581,26 @@ fn resolve_rigid_object(field: &str, cfg: &RigidObjectCfg) -> Result<RigidObject
             ang_vel: cfg.init_state.ang_vel,
         },
     })
+}
+
+/// Rejects a negative or non-finite friction coefficient, or a restitution outside [0, 1].
+fn check_materials(field: &str, shapes: &[Shape]) -> Result<(), SceneError> {
+    for (i, s) in shapes.iter().enumerate() {
+        let m = &s.material;
+        if !(m.friction.is_finite() && m.friction >= 0.0) {
+            return Err(SceneError::Invalid {
+                field: format!("{field}[{i}].material.friction"),
+                message: format!("must be 0 or more, got {}", m.friction),
+            });
+        }
+        if !(0.0..=1.0).contains(&m.restitution) {
+            return Err(SceneError::Invalid {
+                field: format!("{field}[{i}].material.restitution"),
+                message: format!("must be in [0, 1], got {}", m.restitution),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Mass properties of a uniform solid of the given geometry and mass, in the shape frame.
