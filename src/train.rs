@@ -170,6 +170,7 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         agent: mut agent_overrides,
         black_box: black_box_overrides,
     } = split_overrides(&args.overrides);
+    check_black_box_overrides(&configs, &black_box_overrides)?;
     if let Some(s) = args.env.seed {
         agent_overrides.push(format!("seed={s}"));
     }
@@ -217,6 +218,26 @@ fn check_task(task: Option<&str>) -> Result<(), RlError> {
                 .filter(|t| t.agent.is_some())
                 .map(|t| t.id.to_string())
                 .collect(),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// Fails when `bb.` overrides are given for a run without a black-box config (they would be
+/// ignored).
+fn check_black_box_overrides(
+    configs: &crate::RunConfigs,
+    overrides: &[String],
+) -> Result<(), RlError> {
+    match (overrides.first(), &configs.black_box) {
+        (Some(first), None) => Err(RlError::InvalidConfig {
+            file: "<command line>".into(),
+            field: format!("bb.{first}"),
+            message: format!(
+                "`{}` is a step-based task, which has no black-box config to override: remove \
+                 the `bb.` overrides, or run a black-box task (or pass --bb-config)",
+                configs.name
+            ),
         }),
         _ => Ok(()),
     }
@@ -376,6 +397,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         args.agent_config.as_deref(),
         args.bb_config.as_deref(),
     )?;
+    check_black_box_overrides(&configs, &overrides.black_box)?;
     let base = match &args.checkpoint {
         Some(p) => p.with_extension(""),
         None => {

@@ -63,3 +63,26 @@ fn agent_overrides_take_the_env_prefix() {
         run(&args, false).unwrap_or_else(|e| panic!("{set}: {e}"));
     }
 }
+
+/// `bb.` overrides on a step-based task are an error, not silently ignored.
+#[test]
+fn black_box_overrides_on_a_step_based_task_are_errors() {
+    let root = std::env::temp_dir().join(format!("orbit-cli-bb-{}", std::process::id()));
+    let args = TrainArgs::parse_from([
+        "train",
+        "--task",
+        "Reach-Franka-v0",
+        "--log-root",
+        root.to_str().unwrap(),
+        "bb.context=None",
+    ]);
+    let message = train(&args, false).err().expect("an error").to_string();
+    assert!(
+        message.contains("bb.context=None") && message.contains("step-based"),
+        "{message}"
+    );
+    assert!(!root.exists(), "no run directory");
+    let args = PlayArgs::parse_from(["play", "--task", "Reach-Franka-v0", "bb.context=None"]);
+    let message = play(&args).unwrap_err().to_string();
+    assert!(message.contains("step-based"), "{message}");
+}

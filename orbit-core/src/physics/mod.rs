@@ -72,6 +72,12 @@ impl SimCfg {
                 self.dt
             )));
         }
+        if self.num_threads > MAX_THREADS {
+            return Err(PhysicsError::InvalidInput(format!(
+                "sim.num_threads must be 0 (one per core) or at most {MAX_THREADS}, got {}",
+                self.num_threads
+            )));
+        }
         if !self.gravity.is_finite() {
             return Err(PhysicsError::InvalidInput(format!(
                 "sim.gravity must be finite, got {:?}",
@@ -91,6 +97,9 @@ impl SimCfg {
         }
     }
 }
+
+/// The most worker threads `SimCfg::num_threads` may ask for: more only waits on spawning.
+pub const MAX_THREADS: usize = 1024;
 
 /// Errors reported by physics backends.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -389,4 +398,28 @@ pub fn check_env_ids(env_ids: &[usize], num_envs: usize) -> Result<(), PhysicsEr
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A thread count no machine needs is refused before any thread is spawned.
+    #[test]
+    fn too_many_threads_are_refused() {
+        let ok = SimCfg {
+            num_threads: MAX_THREADS,
+            ..SimCfg::default()
+        };
+        assert!(ok.validate().is_ok());
+        let sim = SimCfg {
+            num_threads: 100_000,
+            ..SimCfg::default()
+        };
+        let message = sim.validate().unwrap_err().to_string();
+        assert!(
+            message.contains("sim.num_threads") && message.contains("100000"),
+            "{message}"
+        );
+    }
 }
