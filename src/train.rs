@@ -213,11 +213,7 @@ fn check_task(task: Option<&str>) -> Result<(), RlError> {
     match task {
         Some(id) if orbit_managers::task(id).is_err() => Err(RlError::UnknownTask {
             task: id.to_string(),
-            trainable: orbit_managers::tasks()
-                .into_iter()
-                .filter(|t| t.agent.is_some())
-                .map(|t| t.id.to_string())
-                .collect(),
+            trainable: trainable_tasks(),
         }),
         _ => Ok(()),
     }
@@ -250,13 +246,18 @@ fn agent_file(configs: &crate::RunConfigs) -> Result<PathBuf, RlError> {
             "`{}` has no training config: pass one with --agent-config FILE, or train a task \
              that has one: {:?}",
             configs.name,
-            orbit_managers::tasks()
-                .iter()
-                .filter(|t| t.agent.is_some())
-                .map(|t| t.id)
-                .collect::<Vec<_>>()
+            trainable_tasks()
         ))
     })
+}
+
+/// The ids of the registered tasks that have a training config.
+fn trainable_tasks() -> Vec<String> {
+    orbit_managers::tasks()
+        .into_iter()
+        .filter(|t| t.agent.is_some())
+        .map(|t| t.id.to_string())
+        .collect()
 }
 
 /// Writes the run's resolved configs into `<dir>/params/`: `env.ron`, `agent.ron` and, for a

@@ -48,16 +48,22 @@ pub fn bundled_names() -> &'static [&'static str] {
 /// applied in order to the composed scene. Resolve its robot with [`model_loader`].
 pub fn box_pushing_scene_cfg(overrides: &[String]) -> Result<SceneCfg, ConfigError> {
     let text = bundled("scenes/box_pushing.ron").expect("the scene is bundled");
-    let file = Bundled::full_path("assets/scenes/box_pushing.ron");
-    let mut doc = orbit_core::config::parse_document(text, &file.display().to_string(), &[])?;
+    let mut doc = orbit_core::config::parse_document(text, &box_pushing_scene_file(), &[])?;
     scene_cfg(&mut doc, overrides)
+}
+
+/// How errors name the bundled box-pushing scene.
+fn box_pushing_scene_file() -> String {
+    Bundled::full_path("assets/scenes/box_pushing.ron")
+        .display()
+        .to_string()
 }
 
 /// The bundled box-pushing scene, resolved (models loaded, regexes matched), with `overrides`
 /// applied to its config first.
 pub fn box_pushing_scene(overrides: &[String]) -> Result<SceneDesc, AssetError> {
     let cfg = box_pushing_scene_cfg(overrides)?;
-    resolve_scene(&cfg, "assets/scenes/box_pushing.ron (bundled)", None)
+    resolve_scene(&cfg, &box_pushing_scene_file(), None)
 }
 
 /// Loads a scene config from a RON file (with includes; entities may name asset configs, see

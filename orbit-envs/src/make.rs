@@ -35,27 +35,30 @@ impl RunConfigs {
         bb_config: Option<&Path>,
     ) -> Result<Self, orbit_managers::EnvError> {
         let registered = match (task, task_config) {
-            (Some(id), _) => Some(orbit_managers::task(id)?),
-            (None, Some(_)) => None,
-            (None, None) => Some(orbit_managers::task(default_task)?),
-        };
-        let name = match (&registered, task_config) {
-            (Some(t), _) => t.id.to_string(),
-            (None, Some(file)) => file.display().to_string(),
-            (None, None) => unreachable!("a task without a file is the default task"),
+            (None, Some(file)) => Self {
+                name: file.display().to_string(),
+                env: file.to_path_buf(),
+                agent: None,
+                black_box: None,
+            },
+            (id, _) => {
+                let t = orbit_managers::task(id.unwrap_or(default_task))?;
+                Self {
+                    name: t.id.to_string(),
+                    env: t.env,
+                    agent: t.agent,
+                    black_box: t.black_box,
+                }
+            }
         };
         let file = |given: Option<&Path>, registered: Option<PathBuf>| {
             given.map(Path::to_path_buf).or(registered)
         };
         Ok(Self {
-            name,
-            env: file(task_config, registered.as_ref().map(|t| t.env.clone()))
-                .expect("a registered task or a file"),
-            agent: file(
-                agent_config,
-                registered.as_ref().and_then(|t| t.agent.clone()),
-            ),
-            black_box: file(bb_config, registered.and_then(|t| t.black_box)),
+            env: file(task_config, Some(registered.env)).expect("given or registered"),
+            agent: file(agent_config, registered.agent),
+            black_box: file(bb_config, registered.black_box),
+            name: registered.name,
         })
     }
 }

@@ -162,7 +162,8 @@ pub fn make(id: &str, overrides: &[String]) -> Result<ManagerBasedRlEnv, EnvErro
 
 /// Builds the env of a config file (on disk or bundled) with overrides.
 pub fn make_from_file(path: &Path, overrides: &[String]) -> Result<ManagerBasedRlEnv, EnvError> {
-    ManagerBasedRlEnv::from_document(&load_env_config(path, overrides)?)
+    // `from_document` composes the scene itself.
+    ManagerBasedRlEnv::from_document(&load_config(path, overrides)?)
 }
 
 /// Writes the config files of task `id` (env, agent, black-box, and every file they include)
