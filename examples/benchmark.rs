@@ -56,8 +56,8 @@ struct Args {
     /// Scene config overrides `key.path=value`.
     #[arg(long = "set")]
     overrides: Vec<String>,
-    /// Overrides of the full env's task config `key.path=value`, as `train` takes them
-    /// without the `env.` prefix (e.g. an extra observation term).
+    /// Overrides of the full env's task config `key.path=value` (e.g. an extra observation
+    /// term), with or without `train`'s `env.` prefix.
     #[arg(long = "env-set")]
     env_overrides: Vec<String>,
     /// Actions of the full-env column: small sines (the arm stays near its start and the rod
@@ -101,7 +101,7 @@ fn full_env(args: &Args, n: usize) -> Result<FullEnv, Box<dyn std::error::Error>
     overrides.push(format!("sim.num_threads={}", args.threads));
     overrides.push(format!("sim.solver_iterations={}", args.solver_iterations));
     overrides.push(format!("decimation={}", args.decimation));
-    overrides.extend(args.env_overrides.iter().cloned());
+    overrides.extend(args.env_overrides.iter().map(|o| orbit::env_override(o)));
     orbit::link_registrations();
     let (mut env, _) = orbit::make_env(
         args.task.as_deref(),

@@ -9,10 +9,16 @@
 //!
 //! Writes `logs/<experiment>/<timestamp>/`: resolved configs (`params/`), checkpoints
 //! (`model_<it>.*`), `scalars.csv` and `training_curves.png`; with `--video`, GIFs in `videos/train/`.
+//! Ctrl-C (or SIGTERM) stops at the next env step with a checkpoint that `--resume` continues
+//! from; a second Ctrl-C exits at once.
 
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
     orbit::init_logging();
-    orbit::exit_code(orbit::train::train(&orbit::train::TrainArgs::parse(), true))
+    let args = orbit::train::TrainArgs::parse();
+    let run = orbit::train::stop_on_signals()
+        .map_err(Into::into)
+        .and_then(|stop| orbit::train::train_with(&args, true, Some(stop)));
+    orbit::exit_code(run)
 }

@@ -29,11 +29,10 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
         return Err("`--steps` must be at least 1: there is nothing to report of no steps".into());
     }
     let e = &args.env;
-    // One syntax everywhere: `train`'s `env.` prefix is accepted too.
     let user: Vec<String> = args
         .overrides
         .iter()
-        .map(|o| o.strip_prefix("env.").unwrap_or(o).to_string())
+        .map(|o| crate::env_override(o))
         .collect();
     let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &user);
     let (mut env, name) =

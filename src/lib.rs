@@ -47,8 +47,17 @@ pub fn exit_code<T>(result: Result<T, Box<dyn std::error::Error>>) -> std::proce
         Ok(_) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            std::process::ExitCode::FAILURE
+            std::process::ExitCode::from(failure_status(e.as_ref()))
         }
+    }
+}
+
+/// The exit status of a failed command: 130 for a run stopped by a signal (as shells report
+/// 128 + SIGINT), else 1.
+pub fn failure_status(error: &(dyn std::error::Error + 'static)) -> u8 {
+    match error.downcast_ref::<orbit_rl::RlError>() {
+        Some(orbit_rl::RlError::Interrupted { .. }) => 130,
+        _ => 1,
     }
 }
 
@@ -94,6 +103,12 @@ pub struct VideoArgs {
     pub video_length: usize,
 }
 
+/// An env override as the env config takes it: `train`'s `env.` prefix, which every command
+/// accepts, removed (`env.sim.dt=0.001` and `sim.dt=0.001` are the same override).
+pub fn env_override(text: &str) -> String {
+    text.strip_prefix("env.").unwrap_or(text).to_string()
+}
+
 /// Common command-line flags of the examples (Isaac Lab's names), turned into overrides.
 pub fn run_overrides(
     num_envs: Option<usize>,
@@ -118,3 +133,14 @@ pub fn run_overrides(
 pub mod agent;
 pub mod learner;
 pub mod train;
+
+#[cfg(test)]
+mod tests {
+    /// `env.x=…` and `x=…` are one override; other prefixes are left alone.
+    #[test]
+    fn env_overrides_take_the_env_prefix_or_none() {
+        assert_eq!(super::env_override("env.sim.dt=0.001"), "sim.dt=0.001");
+        assert_eq!(super::env_override("sim.dt=0.001"), "sim.dt=0.001");
+        assert_eq!(super::env_override("environment=1"), "environment=1");
+    }
+}

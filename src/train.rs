@@ -3,13 +3,15 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 use clap::Parser;
 use orbit_core::config::Node;
 use orbit_render::VideoCfg;
 use orbit_rl::burn::tensor::Device;
 use orbit_rl::run_dir::{
-    ENV_CONFIG_FILE, PARAMS_DIR, checkpoint_env_config, create_run_dir, resolve_checkpoint,
+    ENV_CONFIG_FILE, PARAMS_DIR, checkpoint_env_config, create_run_dir, find_checkpoint,
 };
 
 /// The training config in a run's `params/` (`--agent-config` takes it back).
@@ -48,10 +50,12 @@ pub struct TrainArgs {
     /// `<log-root>/<experiment>/`; the last match (the newest run) is taken.
     #[arg(long, default_value = ".*")]
     pub load_run: String,
-    /// Checkpoint regex within the run, matched against whole names (`model_<iteration>`:
-    /// `model_1` is iteration 1 only); the highest matching iteration is taken.
-    #[arg(long, default_value = "model_.*")]
-    pub checkpoint: String,
+    /// Checkpoint to resume from: a path (`logs/<experiment>/<run>/model_49`, with or without
+    /// an extension), or a regex of names within the `--load-run` run, matched against whole
+    /// names (`model_1` is iteration 1 only; the highest matching iteration is taken). Default:
+    /// the run's last checkpoint.
+    #[arg(long)]
+    pub checkpoint: Option<String>,
     /// Videos during training.
     #[command(flatten)]
     pub video: crate::VideoArgs,
@@ -91,11 +95,12 @@ pub struct PlayArgs {
     /// physics backend of the env.
     #[command(flatten)]
     pub env: crate::EnvArgs,
-    /// A checkpoint path (`…/model_<it>`, with or without extension); default: the newest run's
-    /// last checkpoint of the task's experiment.
+    /// Checkpoint to play, as `train --resume` takes it: a path (`…/model_<it>`, with or
+    /// without an extension) or a regex of names within the `--load-run` run; default: the
+    /// newest run's last checkpoint of the task's experiment.
     #[arg(long)]
-    pub checkpoint: Option<PathBuf>,
-    /// Run directory regex used when no checkpoint path is given.
+    pub checkpoint: Option<String>,
+    /// Run directory regex used when `--checkpoint` is not a path.
     #[arg(long, default_value = ".*")]
     pub load_run: String,
     /// Root of the run directories.
@@ -142,7 +147,7 @@ fn split_overrides(tokens: &[String]) -> Overrides {
         } else if let Some(rest) = t.strip_prefix("bb.") {
             o.black_box.push(rest.to_string());
         } else {
-            o.env.push(t.strip_prefix("env.").unwrap_or(t).to_string());
+            o.env.push(crate::env_override(t));
         }
     }
     o
@@ -189,7 +194,7 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     }
     let agent_doc = orbit_managers::load_config(&agent_file, &agent_overrides)
         .map_err(|err| RlError::EnvMismatch(err.to_string()))?;
-    let agent: RunnerCfg = orbit_core::config::from_overridden_node(&agent_doc, &agent_overrides)?;
+    let agent: RunnerCfg = orbit_core::config::from_node(&agent_doc)?;
     agent.validate(&agent_file.display().to_string())?;
     let mut env_overrides = agent.env_overrides.clone();
     env_overrides.extend(user_env);
@@ -260,13 +265,16 @@ fn trainable_tasks() -> Vec<String> {
         .collect()
 }
 
-/// Writes the run's resolved configs into `<dir>/params/`: `env.ron`, `agent.ron` and, for a
-/// black-box run, `black_box.ron`, each a self-contained file (includes merged, overrides
-/// applied) that `--task-config`, `--agent-config` and `--bb-config` take back.
-fn write_params(dir: &Path, run: &ResolvedRun) -> Result<(), Box<dyn std::error::Error>> {
+/// Writes the run's resolved configs into `<dir>/params/`: `env.ron` (`env_doc`), `agent.ron`
+/// and, for a black-box run, `black_box.ron`, each a self-contained file (includes merged,
+/// overrides applied) that `--task-config`, `--agent-config` and `--bb-config` take back.
+fn write_params(
+    dir: &Path,
+    run: &ResolvedRun,
+    env_doc: &Node,
+) -> Result<(), Box<dyn std::error::Error>> {
     let params = dir.join(PARAMS_DIR);
     std::fs::create_dir_all(&params).map_err(RlError::io(&params))?;
-    let env_doc = orbit_managers::load_env_config(&run.configs.env, &run.env_overrides)?;
     let mut files = vec![
         (ENV_CONFIG_FILE, env_doc.to_ron()),
         (AGENT_CONFIG_FILE, run.agent_doc.to_ron()),
@@ -287,48 +295,67 @@ pub fn train(
     args: &TrainArgs,
     show_progress: bool,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
+    train_with(args, show_progress, None)
+}
+
+/// A flag that the first SIGINT (Ctrl-C) or SIGTERM sets; a second one ends the process at once
+/// with exit code 130. Pass it to [`train_with`] to stop training with a checkpoint.
+pub fn stop_on_signals() -> Result<Arc<AtomicBool>, RlError> {
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let register = || {
+            // The order matters: the exit hook sees the flag the first signal set.
+            signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&stop))?;
+            signal_hook::flag::register(signal, Arc::clone(&stop))
+        };
+        register().map_err(|e| RlError::Device(format!("installing a signal handler: {e}")))?;
+    }
+    Ok(stop)
+}
+
+/// [`train`], stopping with a checkpoint ([`RlError::Interrupted`]) once `stop` is set.
+pub fn train_with(
+    args: &TrainArgs,
+    show_progress: bool,
+    stop: Option<Arc<AtomicBool>>,
+) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
     let run = resolve(args)?;
     let cfg = run.agent.clone();
     let resume_from = if args.resume {
-        Some(resolve_checkpoint(
+        Some(find_checkpoint(
             &args.log_root.join(&cfg.experiment_name),
             &args.load_run,
-            &args.checkpoint,
+            args.checkpoint.as_deref(),
         )?)
     } else {
         None
     };
+    let env_doc = orbit_managers::load_env_config(&run.configs.env, &run.env_overrides)?;
+    if let Some(n) = orbit_core::config::node_at(&env_doc, "num_envs") {
+        let n: usize = orbit_core::config::from_node(n)?;
+        cfg.validate_batch(n, &agent_file(&run.configs)?.display().to_string())?;
+    }
     // Only once the configs and the checkpoint to resume are known to be good.
     let dir = create_run_dir(&args.log_root, &cfg.experiment_name, &cfg.run_name)?;
-    write_params(&dir, &run)?;
-    let video = args.video.video.then(|| VideoCfg {
-        dir: dir.join("videos").join("train"),
-        length: args.video.video_length,
-        interval: Some(args.video_interval),
-    });
-    let (vec_env, _) = crate::make_vec_env(
-        &run.configs,
-        &run.env_overrides,
-        &run.black_box_overrides,
-        video,
-    )?;
-    println!(
-        "{}: {} envs × {} steps per iteration, {} iterations; run directory {}",
-        run.configs.name,
-        vec_env.num_envs(),
-        cfg.num_steps_per_env,
-        cfg.max_iterations,
-        dir.display()
-    );
-    let iterations = cfg.max_iterations;
-    let device = crate::learner::learner_device(cfg.device)?;
-    let mut runner = OnPolicyRunner::new(vec_env, cfg, Some(dir), device)?;
-    if let Some(base) = &resume_from {
-        println!("resuming from {}", base.display());
-        runner.load_checkpoint(base)?;
-    }
+    let mut runner = match start_runner(
+        args,
+        &run,
+        &env_doc,
+        &dir,
+        resume_from.as_deref(),
+        show_progress,
+    ) {
+        Ok(runner) => runner,
+        Err(e) => {
+            // The directory holds only what this run just wrote: leave no run without a
+            // checkpoint behind.
+            let _ = std::fs::remove_dir_all(&dir);
+            return Err(e);
+        }
+    };
     runner.show_progress = show_progress;
-    runner.learn(iterations)?;
+    runner.stop = stop;
+    runner.learn(cfg.max_iterations)?;
     if let Some(dir) = runner.log_dir() {
         // A resumed run's curves continue those of the run it resumed from.
         let history = match &resume_from {
@@ -336,6 +363,52 @@ pub fn train(
             None => runner.history.clone(),
         };
         orbit_rl::plot::write_training_curves(dir, &history, runner.cfg.success_metric.is_some())?;
+    }
+    Ok(runner)
+}
+
+/// Writes the run's `params/`, builds its env and a runner logging into `dir`, and loads the
+/// checkpoint to resume from.
+fn start_runner(
+    args: &TrainArgs,
+    run: &ResolvedRun,
+    env_doc: &Node,
+    dir: &Path,
+    resume_from: Option<&Path>,
+    show_progress: bool,
+) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
+    write_params(dir, run, env_doc)?;
+    let video = args.video.video.then(|| VideoCfg {
+        dir: dir.join("videos").join("train"),
+        length: args.video.video_length,
+        interval: Some(args.video_interval),
+    });
+    if show_progress {
+        println!("{}: building the env…", run.configs.name);
+    }
+    let build_start = std::time::Instant::now();
+    let (vec_env, _) = crate::make_vec_env(
+        &run.configs,
+        &run.env_overrides,
+        &run.black_box_overrides,
+        video,
+    )?;
+    let cfg = run.agent.clone();
+    println!(
+        "{}: {} envs × {} steps per iteration, {} iterations (env built in {:.1} s); run \
+         directory {}",
+        run.configs.name,
+        vec_env.num_envs(),
+        cfg.num_steps_per_env,
+        cfg.max_iterations,
+        build_start.elapsed().as_secs_f64(),
+        dir.display()
+    );
+    let device = crate::learner::learner_device(cfg.device)?;
+    let mut runner = OnPolicyRunner::new(vec_env, cfg, Some(dir.to_path_buf()), device)?;
+    if let Some(base) = resume_from {
+        println!("resuming from {}", base.display());
+        runner.load_checkpoint(base)?;
     }
     Ok(runner)
 }
@@ -399,19 +472,21 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         args.bb_config.as_deref(),
     )?;
     check_black_box_overrides(&configs, &overrides.black_box)?;
-    let base = match &args.checkpoint {
-        Some(p) => p.with_extension(""),
-        None => {
-            let file = agent_file(&configs)?;
+    let experiment = match agent_file(&configs) {
+        Ok(file) => {
             let doc = orbit_managers::load_config(&file, &[])?;
             let agent: RunnerCfg = orbit_core::config::from_node(&doc)?;
-            resolve_checkpoint(
-                &args.log_root.join(&agent.experiment_name),
-                &args.load_run,
-                "model_.*",
-            )?
+            agent.experiment_name
         }
+        // Without a training config only a checkpoint path can say what to play.
+        Err(e) if args.checkpoint.is_none() => return Err(e.into()),
+        Err(_) => String::new(),
     };
+    let base = find_checkpoint(
+        &args.log_root.join(experiment),
+        &args.load_run,
+        args.checkpoint.as_deref(),
+    )?;
     let policy = Policy::load(&base, Device::flex())?;
     let e = &args.env;
     let env_overrides =

@@ -1,8 +1,27 @@
 //! Requests that would do nothing are errors that name the flag, and leave nothing behind.
 
+use std::path::Path;
+
 use clap::Parser;
 use orbit::agent::{AgentArgs, run};
 use orbit::train::{PlayArgs, TrainArgs, play, train};
+
+/// The error message of `train` on the reach task with 4 envs, logging under `root`, with
+/// `extra` tokens.
+fn reach_train_error(root: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "train",
+        "--task",
+        "Reach-Franka-v0",
+        "--num-envs",
+        "4",
+        "--log-root",
+        root.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let args = TrainArgs::parse_from(args);
+    train(&args, false).err().expect("an error").to_string()
+}
 
 #[test]
 fn zero_iterations_steps_or_episodes_are_errors() {
@@ -68,15 +87,7 @@ fn agent_overrides_take_the_env_prefix() {
 #[test]
 fn black_box_overrides_on_a_step_based_task_are_errors() {
     let root = std::env::temp_dir().join(format!("orbit-cli-bb-{}", std::process::id()));
-    let args = TrainArgs::parse_from([
-        "train",
-        "--task",
-        "Reach-Franka-v0",
-        "--log-root",
-        root.to_str().unwrap(),
-        "bb.context=None",
-    ]);
-    let message = train(&args, false).err().expect("an error").to_string();
+    let message = reach_train_error(&root, &["bb.context=None"]);
     assert!(
         message.contains("bb.context=None") && message.contains("step-based"),
         "{message}"
@@ -85,4 +96,94 @@ fn black_box_overrides_on_a_step_based_task_are_errors() {
     let args = PlayArgs::parse_from(["play", "--task", "Reach-Franka-v0", "bb.context=None"]);
     let message = play(&args).unwrap_err().to_string();
     assert!(message.contains("step-based"), "{message}");
+}
+
+/// A time step far too long for the arm's drives blows the state up in the first step: `train`
+/// reports it as a physics failure naming the joint, the env and what to change, not as a
+/// diverging policy.
+#[test]
+fn a_physics_blow_up_is_a_physics_error() {
+    let root = std::env::temp_dir().join(format!("orbit-blow-up-{}", std::process::id()));
+    let message = reach_train_error(&root, &["--max-iterations", "1", "env.sim.dt=10.0"]);
+    for part in [
+        "physics became unstable in env step 1",
+        "of articulation `robot`",
+        "in env 0",
+        "4 of 4 envs",
+        "Lower `sim.dt`",
+    ] {
+        assert!(message.contains(part), "`{part}` missing: {message}");
+    }
+    assert!(!message.contains("diverged"), "{message}");
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// An override error names the override as the user wrote it (not its place among the task's
+/// own overrides), and more minibatches than an iteration collects transitions is refused
+/// before a rollout; neither leaves a run directory behind.
+#[test]
+fn override_errors_name_the_override_and_minibatches_are_checked_first() {
+    let root = std::env::temp_dir().join(format!("orbit-override-errors-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let run = |extra: &str| reach_train_error(&root, &[extra]);
+    let message = run("env.sim.dtx=0.1");
+    assert!(
+        message.starts_with("override `sim.dtx=0.1`: sim.dtx: unknown field `dtx`"),
+        "{message}"
+    );
+    let message = run("agent.algorithm.num_mini_batches=1000");
+    assert!(
+        message.contains("field `algorithm.num_mini_batches`: 1000 minibatches")
+            && message.contains("4 envs × 24 steps collect 96"),
+        "{message}"
+    );
+    let runs = std::fs::read_dir(root.join("franka_reach")).map_or(0, |d| d.count());
+    assert_eq!(runs, 0, "no run directory is left behind");
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// The examples' binaries (which `cargo test` builds beside the tests) print an error as its
+/// message on one line, not as a debug struct, and exit with failure.
+#[test]
+fn examples_print_error_messages_not_debug_structs() {
+    let examples = std::env::current_exe()
+        .unwrap()
+        .parent()
+        .and_then(Path::parent)
+        .unwrap()
+        .join("examples");
+    for (example, args, expected) in [
+        ("zero_agent", &["--task", "Foo-v0"][..], "no task `Foo-v0`"),
+        (
+            "random_agent",
+            &["--set", "sim.dt=-1.0"],
+            "sim.dt must be a positive",
+        ),
+        (
+            "benchmark",
+            &["--backend", "nope", "--num-envs", "1", "--steps", "1"],
+            "unknown physics backend `nope`",
+        ),
+    ] {
+        let binary = examples.join(example);
+        assert!(
+            binary.exists(),
+            "{} is missing: run the tests with `cargo test --workspace`, which builds the examples",
+            binary.display()
+        );
+        let out = std::process::Command::new(&binary)
+            .args(args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{example}: {stderr}");
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains(expected),
+            "{example}: {stderr}"
+        );
+        assert!(
+            !stderr.contains(" {\n") && !stderr.contains(": \""),
+            "{example}: {stderr}"
+        );
+    }
 }

@@ -94,7 +94,7 @@ pub fn resolve_scene(
 fn scene_cfg(doc: &mut Node, overrides: &[String]) -> Result<SceneCfg, ConfigError> {
     compose_scene(doc, "")?;
     orbit_core::config::apply_overrides(doc, overrides)?;
-    orbit_core::config::from_overridden_node(doc, overrides)
+    orbit_core::config::from_node(doc)
 }
 
 /// Loads an articulation model from its source.

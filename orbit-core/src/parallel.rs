@@ -66,34 +66,43 @@ pub fn to_vec(src: &[f32]) -> Vec<f32> {
         .collect()
 }
 
-/// Values per block of [`first_non_finite`]: a whole block is checked without branching, so
-/// that the check vectorises, and only a block found to hold a bad value is searched for it.
+/// Values per block of [`first_beyond`]: a whole block is checked without branching, so that
+/// the check vectorises, and only a block found to hold a bad value is searched for it.
 const SCAN_BLOCK: usize = 1 << 12;
 
 /// The index of the first value that is NaN or infinite, scanned on every core; the same
 /// index a sequential scan finds.
 pub fn first_non_finite(values: &[f32]) -> Option<usize> {
+    first_beyond(values, f32::MAX)
+}
+
+/// The index of the first value whose magnitude exceeds `limit` (≥ 0) or that is NaN, scanned
+/// on every core; the same index a sequential scan finds.
+pub fn first_beyond(values: &[f32], limit: f32) -> Option<usize> {
     use rayon::prelude::*;
+    let limit = limit.abs().to_bits();
     let block = values
         .par_chunks(SCAN_BLOCK)
         .with_min_len(MIN_VALUES_PER_TASK / SCAN_BLOCK)
-        .position_first(|b| !all_finite(b))?;
+        .position_first(|b| max_magnitude_bits(b) > limit)?;
     let start = block * SCAN_BLOCK;
     let end = (start + SCAN_BLOCK).min(values.len());
     values[start..end]
         .iter()
-        .position(|v| !v.is_finite())
+        .position(|v| magnitude_bits(*v) > limit)
         .map(|i| start + i)
 }
 
-/// Whether no value is NaN or infinite (an exponent of all ones), checked without an early exit
-/// so that the compiler vectorises it.
-fn all_finite(values: &[f32]) -> bool {
-    const EXPONENT: u32 = 0x7f80_0000;
-    values
-        .iter()
-        .fold(0, |max, v| max.max(v.to_bits() & EXPONENT))
-        != EXPONENT
+/// The bits of `|v|`: for non-negative floats the integer order is the numeric order, with
+/// infinity above every finite value and NaN above infinity.
+fn magnitude_bits(v: f32) -> u32 {
+    v.to_bits() & 0x7fff_ffff
+}
+
+/// The largest [`magnitude_bits`] of `values`, without an early exit so that the compiler
+/// vectorises it.
+fn max_magnitude_bits(values: &[f32]) -> u32 {
+    values.iter().fold(0, |max, v| max.max(magnitude_bits(*v)))
 }
 
 #[cfg(test)]
@@ -141,5 +150,18 @@ mod tests {
             values[last] = bad;
             assert_eq!(first_non_finite(&values), Some(last), "{bad}");
         }
+    }
+
+    /// Values at the limit pass; the first beyond it (either sign) or NaN is found.
+    #[test]
+    fn first_beyond_compares_magnitudes() {
+        let mut values = vec![-2.0f32, 2.0, 1.5, -1.0];
+        assert_eq!(first_beyond(&values, 2.0), None);
+        assert_eq!(first_beyond(&values, 1.9), Some(0));
+        values[0] = 0.0;
+        assert_eq!(first_beyond(&values, 1.9), Some(1));
+        values[1] = 0.0;
+        values[3] = f32::NAN;
+        assert_eq!(first_beyond(&values, 1.9), Some(3));
     }
 }

@@ -369,10 +369,19 @@ impl ManagerBasedEnv {
                 lap(&mut self.timings.physics, clock);
             }
         }
+        self.common_step_counter += 1;
+        if let Some(instability) = orbit_core::physics::check_state(self.scene.backend.as_ref()) {
+            return Err(EnvError::Unstable {
+                step: self.common_step_counter,
+                substeps: self.cfg.decimation,
+                dt: self.cfg.sim.dt,
+                solver_iterations: self.cfg.sim.solver_iterations,
+                instability,
+            });
+        }
         for l in &mut self.episode_length {
             *l += 1;
         }
-        self.common_step_counter += 1;
         self.timings.steps += 1;
         Ok(())
     }

@@ -41,6 +41,26 @@ pub enum EnvError {
     /// An action batch of the wrong shape or with non-finite values.
     #[error("invalid action: {0}")]
     InvalidAction(String),
+    /// The simulated state became non-finite or exploded in a step: the simulation settings,
+    /// not the policy, are at fault.
+    #[error(
+        "the physics became unstable in env step {step} (counted from the env's start; \
+         {substeps} physics steps of {dt} s each): {instability}. Lower `sim.dt`, raise \
+         `sim.solver_iterations` (now {solver_iterations}; 0 is the backend's default), or \
+         check the scene's masses, stiffnesses and gains"
+    )]
+    Unstable {
+        /// Env steps since the env was built, the failing one included.
+        step: u64,
+        /// Physics steps per env step (`decimation`).
+        substeps: usize,
+        /// The physics time step.
+        dt: f32,
+        /// The configured solver iterations.
+        solver_iterations: usize,
+        /// The quantity that went out of range, where.
+        instability: orbit_core::physics::Instability,
+    },
     /// A step observer (e.g. a video recorder) failed.
     #[error("step observer: {0}")]
     Observer(String),

@@ -195,7 +195,7 @@ impl RunnerCfg {
     /// `overrides` (`key.path=value`) applied.
     pub fn load(path: &std::path::Path, overrides: &[String]) -> Result<Self, crate::RlError> {
         let doc = orbit_managers::load_config(path, overrides)?;
-        let cfg: RunnerCfg = orbit_core::config::from_overridden_node(&doc, overrides)?;
+        let cfg: RunnerCfg = orbit_core::config::from_node(&doc)?;
         cfg.validate(&path.display().to_string())?;
         Ok(cfg)
     }
@@ -262,6 +262,26 @@ impl RunnerCfg {
                 "policy.actor_hidden_dims",
                 "layer widths must be at least 1".into(),
             );
+        }
+        Ok(())
+    }
+
+    /// Checks that an iteration of `num_envs` envs collects enough transitions for the
+    /// minibatches (before a run directory or a rollout is spent on a run that cannot update).
+    pub fn validate_batch(&self, num_envs: usize, file_name: &str) -> Result<(), crate::RlError> {
+        let transitions = num_envs * self.num_steps_per_env;
+        let minibatches = self.algorithm.num_mini_batches;
+        if minibatches > transitions {
+            return Err(crate::RlError::InvalidConfig {
+                file: file_name.to_string(),
+                field: "algorithm.num_mini_batches".into(),
+                message: format!(
+                    "{minibatches} minibatches need at least as many transitions per \
+                     iteration, and {num_envs} envs × {} steps collect {transitions}: lower \
+                     it, or raise the envs or `num_steps_per_env`",
+                    self.num_steps_per_env
+                ),
+            });
         }
         Ok(())
     }

@@ -62,9 +62,36 @@ pub enum RlError {
     /// The learner's device could not be opened.
     #[error("learner device: {0}")]
     Device(String),
+    /// Training was asked to stop (Ctrl-C, SIGTERM) and stopped at an env step, after saving
+    /// a checkpoint of the last finished iteration.
+    #[error("{}", interrupted_message(*iterations, checkpoint.as_deref()))]
+    Interrupted {
+        /// Iterations finished (those of a resumed run included).
+        iterations: usize,
+        /// The checkpoint written or already there (none before the first iteration ends).
+        checkpoint: Option<PathBuf>,
+    },
     /// Training produced a non-finite number (the loss or the policy's output).
     #[error("training diverged: {0} is not finite; lower the learning rate or check the rewards")]
     NonFinite(String),
+}
+
+/// What [`RlError::Interrupted`] tells the user: where the checkpoint is and how to go on.
+fn interrupted_message(iterations: usize, checkpoint: Option<&std::path::Path>) -> String {
+    match checkpoint {
+        Some(base) => {
+            let run = base
+                .parent()
+                .and_then(|d| d.file_name())
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            format!(
+                "interrupted after {iterations} iterations; checkpoint saved: {} (continue \
+                 with `train --resume --load-run {run}` and the run's other flags)",
+                base.display()
+            )
+        }
+        None => "interrupted before the first iteration finished: nothing to save".to_string(),
+    }
 }
 
 impl RlError {

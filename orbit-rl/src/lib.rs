@@ -12,6 +12,7 @@
 
 pub mod adam;
 pub mod cfg;
+pub mod checkpoint;
 mod error;
 pub mod logger;
 pub mod model;

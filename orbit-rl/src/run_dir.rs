@@ -125,9 +125,76 @@ pub fn resolve_checkpoint(
     ))
 }
 
+/// The checkpoint that `--checkpoint` names, one meaning in `train --resume` and `play`: the
+/// path of a checkpoint file (`…/model_49`, with or without an extension such as `.json` or
+/// `.bpk`), or else a pattern of checkpoint names (`model_49`, `model_.*`) looked up with
+/// [`resolve_checkpoint`] among the runs of `experiment_dir` that `load_run` matches. `None`
+/// is the newest run's last checkpoint. Returns the checkpoint's path without extension.
+pub fn find_checkpoint(
+    experiment_dir: &Path,
+    load_run: &str,
+    checkpoint: Option<&str>,
+) -> Result<PathBuf, RlError> {
+    let Some(given) = checkpoint else {
+        return resolve_checkpoint(experiment_dir, load_run, "model_.*");
+    };
+    let path = Path::new(given);
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or(given);
+    let stem = [".adam.bpk", ".bpk", ".json"]
+        .iter()
+        .find_map(|ext| name.strip_suffix(ext))
+        .unwrap_or(name);
+    let base = path.with_file_name(stem);
+    if base.with_extension("json").is_file() {
+        return Ok(base);
+    }
+    if path.parent().is_some_and(|p| !p.as_os_str().is_empty()) {
+        return Err(RlError::checkpoint(
+            base.with_extension("json"),
+            "no checkpoint at this path (a path names `<run>/model_<it>`, with or without \
+             an extension; a bare name is looked up in the newest run)",
+        ));
+    }
+    resolve_checkpoint(experiment_dir, load_run, given)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A path names that checkpoint, with any of its extensions or none, whatever the run
+    /// pattern; a bare name is a pattern within the runs; a path to nothing is an error.
+    #[test]
+    fn checkpoint_is_a_path_or_a_name_pattern() {
+        let root = std::env::temp_dir().join(format!("orbit-rl-find-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let (old, new) = (
+            root.join("2026-01-01_00-00-00"),
+            root.join("2026-01-02_00-00-00"),
+        );
+        for (run, it) in [(&old, 5), (&new, 7), (&new, 9)] {
+            std::fs::create_dir_all(run).unwrap();
+            std::fs::write(run.join(format!("model_{it}.json")), "{}").unwrap();
+        }
+        for given in ["model_5", "model_5.json", "model_5.bpk", "model_5.adam.bpk"] {
+            let path = old.join(given);
+            let got = find_checkpoint(&root, "2026-01-02", Some(path.to_str().unwrap())).unwrap();
+            assert_eq!(got, old.join("model_5"), "{given}");
+        }
+        assert_eq!(
+            find_checkpoint(&root, ".*", None).unwrap(),
+            new.join("model_9")
+        );
+        let got = find_checkpoint(&root, ".*", Some("model_7")).unwrap();
+        assert_eq!(got, new.join("model_7"));
+        let missing = old.join("model_6");
+        let err = find_checkpoint(&root, ".*", Some(missing.to_str().unwrap())).unwrap_err();
+        assert!(
+            err.to_string().contains("no checkpoint at this path"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 
     /// The latest run and the highest iteration win; patterns filter both.
     #[test]

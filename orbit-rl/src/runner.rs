@@ -3,18 +3,19 @@
 
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use burn::module::Module;
-use burn::tensor::Device;
-use serde::{Deserialize, Serialize};
-
 use crate::RlError;
-use crate::cfg::{PolicyCfg, RunnerCfg};
+use crate::cfg::RunnerCfg;
+pub use crate::checkpoint::{CheckpointState, read_state};
 use crate::logger::ScalarLog;
 use crate::model::ActorCritic;
 use crate::normalizer::EmpiricalNormalizer;
 use crate::ppo::{LossStats, Ppo, tensor2, values};
+use burn::module::Module;
+use burn::tensor::Device;
 use orbit_envs::VecEnv;
 
 /// Rows after which the observation statistics freeze (RSL-RL's `until`).
@@ -65,35 +66,6 @@ pub struct IterationLog {
     pub episode: BTreeMap<String, f32>,
 }
 
-/// Everything besides the weights that a checkpoint must restore (`model_<it>.json`).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct CheckpointState {
-    /// Iteration the checkpoint was taken after (a resumed run continues from it).
-    pub iteration: usize,
-    /// Learning rate at that point.
-    pub learning_rate: f64,
-    /// Transitions collected so far.
-    pub env_steps: u64,
-    /// Training wall-clock seconds so far.
-    pub wall_time: f64,
-    /// Actor input width.
-    pub num_obs: usize,
-    /// Critic input width.
-    pub num_critic_obs: usize,
-    /// Action width.
-    pub num_actions: usize,
-    /// The network's architecture.
-    pub policy: PolicyCfg,
-    /// Actor observation statistics, if normalisation is on.
-    pub obs_normalizer: Option<EmpiricalNormalizer>,
-    /// Critic observation statistics, if normalisation is on.
-    pub critic_obs_normalizer: Option<EmpiricalNormalizer>,
-    /// Return statistics the critic's output is scaled by, if `normalize_value` is on
-    /// (absent in checkpoints written before the option existed).
-    #[serde(default)]
-    pub value_normalizer: Option<EmpiricalNormalizer>,
-}
-
 /// Trains a policy on a [`VecEnv`] with PPO.
 pub struct OnPolicyRunner<E: VecEnv> {
     /// The environment.
@@ -125,6 +97,10 @@ pub struct OnPolicyRunner<E: VecEnv> {
     current_length: Vec<u32>,
     /// Show a progress bar on the terminal while learning.
     pub show_progress: bool,
+    /// A stop request (set by a signal handler): [`learn`](Self::learn) then stops at the next
+    /// env step, saves a checkpoint of the last finished iteration and returns
+    /// [`RlError::Interrupted`].
+    pub stop: Option<Arc<AtomicBool>>,
     device: Device,
 }
 
@@ -143,6 +119,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             env.num_critic_obs(),
             env.num_actions(),
         );
+        cfg.validate_batch(n, "the runner config")?;
         let model = ActorCritic::new(
             &cfg.policy,
             no,
@@ -188,6 +165,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             current_return: vec![0.0; n],
             current_length: vec![0; n],
             show_progress: false,
+            stop: None,
             device,
         })
     }
@@ -251,7 +229,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         let t_steps = self.cfg.num_steps_per_env;
         let progress = self
             .show_progress
-            .then(|| crate::progress::bar(num_iterations as u64));
+            .then(|| crate::progress::Progress::new(self.iteration, num_iterations));
+        let first_iteration = self.iteration;
         let mut actions = vec![0.0f32; n * na];
         self.observe(true)?;
         let end = self.iteration + num_iterations;
@@ -264,7 +243,20 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let mut env_time = 0.0;
             let mut policy_time = 0.0;
             let physics_before = self.env.step_timings().map(|t| t.physics);
+            if let Some(p) = progress.as_ref().filter(|_| it == first_iteration) {
+                p.phase(&format!(
+                    "iteration {}: collecting {t_steps} steps × {n} envs (a first run on a GPU \
+                     backend compiles its kernels first)",
+                    it + 1
+                ));
+            }
             for _ in 0..t_steps {
+                if self.stop_requested() {
+                    if let Some(p) = &progress {
+                        p.finish();
+                    }
+                    return Err(self.stop_with_checkpoint()?);
+                }
                 let policy_start = Instant::now();
                 let critic_obs = critic_view(self.critic_is_actor, &self.obs, &self.critic_obs);
                 self.alg.act(&self.obs, critic_obs, &mut actions)?;
@@ -316,6 +308,13 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 _ => 0.0,
             };
             let collection_time = start.elapsed().as_secs_f64();
+            if let Some(p) = progress.as_ref().filter(|_| it == first_iteration) {
+                p.phase(&format!(
+                    "iteration {}: collected in {collection_time:.1} s; first update (a GPU \
+                     learner compiles its kernels first)",
+                    it + 1
+                ));
+            }
             let learn_start = Instant::now();
             let losses = self.alg.update()?;
             let learning_time = learn_start.elapsed().as_secs_f64();
@@ -348,8 +347,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             if let Some(s) = &mut self.scalars {
                 s.write(&log)?;
             }
-            if let Some(bar) = &progress {
-                crate::progress::update(bar, &log);
+            if let Some(p) = &progress {
+                p.update(&log);
             }
             tracing::debug!(iteration = it, ?log.mean_return, ?log.success_rate, "iteration");
             self.history.push(log);
@@ -359,10 +358,39 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 self.save_checkpoint()?;
             }
         }
-        if let Some(bar) = progress {
-            bar.finish();
+        if let Some(p) = progress {
+            p.finish();
         }
         Ok(())
+    }
+
+    /// Whether [`stop`](Self::stop) was set.
+    fn stop_requested(&self) -> bool {
+        self.stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Relaxed))
+    }
+
+    /// Saves the last finished iteration's checkpoint, unless it was saved already or no
+    /// iteration finished, and returns the [`RlError::Interrupted`] that names it. The
+    /// unfinished iteration's transitions are dropped (its observations are already in the
+    /// normaliser's statistics).
+    fn stop_with_checkpoint(&self) -> Result<RlError, RlError> {
+        let checkpoint = match (&self.log_dir, self.iteration) {
+            (Some(dir), it) if it > 0 => {
+                let base = dir.join(format!("model_{}", it - 1));
+                if !base.with_extension("json").exists() {
+                    tracing::warn!("stopping: saving a checkpoint (a second signal aborts)");
+                    self.save_checkpoint()?;
+                }
+                Some(base)
+            }
+            _ => None,
+        };
+        Ok(RlError::Interrupted {
+            iterations: self.iteration,
+            checkpoint,
+        })
     }
 
     /// The current policy for inference (mean actions, current normaliser).
@@ -383,7 +411,6 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             return Ok(());
         };
         let base = dir.join(format!("model_{}", self.iteration.saturating_sub(1)));
-        self.alg.save(&base)?;
         let state = CheckpointState {
             iteration: self.iteration,
             learning_rate: self.alg.learning_rate(),
@@ -397,9 +424,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             critic_obs_normalizer: self.saved_critic_normalizer().clone(),
             value_normalizer: self.alg.value_normalizer.clone(),
         };
-        let path = base.with_extension("json");
-        let text = serde_json::to_string_pretty(&state).expect("plain data serialises");
-        std::fs::write(&path, text).map_err(RlError::io(path))
+        crate::checkpoint::write_checkpoint(&base, &self.alg, &state)
     }
 
     /// Restores weights, optimiser, normalisers, learning rate and iteration count from a
@@ -463,13 +488,6 @@ fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
         i / dim,
         values[i]
     )))
-}
-
-/// Reads a checkpoint's `model_<it>.json`.
-pub fn read_state(base: &Path) -> Result<CheckpointState, RlError> {
-    let path = base.with_extension("json");
-    let text = std::fs::read_to_string(&path).map_err(RlError::io(&path))?;
-    serde_json::from_str(&text).map_err(|e| RlError::checkpoint(path, e))
 }
 
 /// A trained policy for inference: observation normaliser + actor, mean actions.

@@ -3,6 +3,9 @@
 //! `a = c` with zero noise (return 0); the untrained one earns about −(‖c‖² + 2σ²) ≈ −2.67.
 
 use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use orbit_core::rng::EnvRng;
 use orbit_envs::VecEnvError;
@@ -22,6 +25,8 @@ struct Bandit {
     /// Steps taken, and the step after which env 1's first observation is NaN.
     steps: usize,
     nan_after: Option<usize>,
+    /// A flag this env sets after a given step, as a signal handler would mid-iteration.
+    stop_after: Option<(usize, Arc<AtomicBool>)>,
 }
 
 impl Bandit {
@@ -36,6 +41,7 @@ impl Bandit {
             log: BTreeMap::new(),
             steps: 0,
             nan_after: None,
+            stop_after: None,
         };
         b.draw();
         b
@@ -88,6 +94,11 @@ impl VecEnv for Bandit {
         self.steps += 1;
         if self.nan_after == Some(self.steps) {
             self.obs[2] = f32::NAN;
+        }
+        if let Some((step, flag)) = &self.stop_after
+            && *step == self.steps
+        {
+            flag.store(true, Ordering::Relaxed);
         }
         Ok(VecEnvStep {
             rewards: &self.rewards,
@@ -176,5 +187,93 @@ fn a_nan_observation_is_an_error_naming_env_and_entry() {
             assert!(msg.contains("env 1's policy observation 0"), "{msg}")
         }
         other => panic!("expected a NonFinite error, got {other:?}"),
+    }
+}
+
+/// A fresh, empty directory for a test's run files.
+fn run_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("orbit-bandit-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// The bytes of a checkpoint's three files.
+fn checkpoint_bytes(base: &Path) -> Vec<Vec<u8>> {
+    ["bpk", "adam.bpk", "json"]
+        .map(|ext| std::fs::read(base.with_extension(ext)).unwrap())
+        .to_vec()
+}
+
+/// A checkpoint write that fails (here a directory stands where its last file is staged, as a
+/// full disk would fail it) is an error at once naming the file; it leaves no part of the new
+/// checkpoint behind and the previous checkpoint byte for byte as it was, still loadable.
+#[test]
+fn a_failed_checkpoint_write_is_reported_and_keeps_the_previous_one() {
+    let dir = run_dir("failed-write");
+    let cfg = RunnerCfg::from_ron(CFG, "bandit.ron", &[]).unwrap();
+    let mut runner =
+        OnPolicyRunner::new(Bandit::new(8), cfg, Some(dir.clone()), Device::flex()).unwrap();
+    runner.learn(1).unwrap();
+    let previous = dir.join("model_0");
+    let before = checkpoint_bytes(&previous);
+    std::fs::create_dir(dir.join("model_1.json.partial")).unwrap();
+    match runner.learn(1) {
+        Err(RlError::Io { path, .. }) => assert!(path.ends_with("model_1.json.partial")),
+        other => panic!("expected the failed write as an error, got {other:?}"),
+    }
+    for name in [
+        "model_1.bpk",
+        "model_1.adam.bpk",
+        "model_1.json",
+        "model_1.bpk.partial",
+    ] {
+        assert!(!dir.join(name).exists(), "{name} was left behind");
+    }
+    assert_eq!(checkpoint_bytes(&previous), before);
+    orbit_rl::Policy::load(&previous, Device::flex()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A stop request in the middle of an iteration ends `learn` at the next step with a
+/// checkpoint of the last finished iteration (saved now: the save interval is far off), and a
+/// runner resuming from it continues with the next iteration.
+#[test]
+fn a_stop_request_saves_a_checkpoint_that_resumes() {
+    let dir = run_dir("stop");
+    let cfg = RunnerCfg::from_ron(CFG, "bandit.ron", &["save_interval=100".into()]).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut env = Bandit::new(8);
+    // 8 steps per iteration: step 28 is in the middle of the fourth iteration (index 3).
+    env.stop_after = Some((28, Arc::clone(&stop)));
+    let mut runner =
+        OnPolicyRunner::new(env, cfg.clone(), Some(dir.clone()), Device::flex()).unwrap();
+    runner.stop = Some(stop);
+    let checkpoint = match runner.learn(40) {
+        Err(RlError::Interrupted {
+            iterations: 3,
+            checkpoint: Some(base),
+        }) => base,
+        other => panic!("expected a stop after 3 iterations, got {other:?}"),
+    };
+    assert_eq!(checkpoint, dir.join("model_2"));
+    assert_eq!(
+        orbit_rl::runner::read_state(&checkpoint).unwrap().iteration,
+        3
+    );
+
+    let resumed_dir = run_dir("stop-resumed");
+    let mut resumed = OnPolicyRunner::new(
+        Bandit::new(8),
+        cfg,
+        Some(resumed_dir.clone()),
+        Device::flex(),
+    )
+    .unwrap();
+    resumed.load_checkpoint(&checkpoint).unwrap();
+    resumed.learn(1).unwrap();
+    assert_eq!(resumed.history[0].iteration, 3);
+    assert!(resumed_dir.join("model_3.json").exists());
+    for d in [dir, resumed_dir] {
+        std::fs::remove_dir_all(d).unwrap();
     }
 }

@@ -90,6 +90,15 @@ fn io_message(file: &std::path::Path, from: Option<&Span>, source: &std::io::Err
 }
 
 fn invalid_message(file: &std::path::Path, line: u32, col: u32, path: &str, msg: &str) -> String {
+    if super::overrides::is_override_file(file) {
+        // An override is one line the user typed: its text says more than a position.
+        let file = file.display();
+        return if path.is_empty() {
+            format!("{file}: {msg}")
+        } else {
+            format!("{file}: {path}: {msg}")
+        };
+    }
     let file = file.display();
     if path.is_empty() {
         format!("{file}:{line}:{col}: {msg}")

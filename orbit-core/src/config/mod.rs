@@ -17,7 +17,7 @@
 //!   the later value wins. Spans follow the winning value, so errors point into the file that
 //!   supplied it.
 //! * Overrides: `path=value` with `.field`, `[index]`, `["key"]` steps and a RON value (its
-//!   span's file is `<override N>`, N counting from 1). Missing struct fields and map entries
+//!   span's file is ``override `path=value` ``, so errors name the override as written). Missing struct fields and map entries
 //!   are created; indexing past a list's end or stepping into a scalar is an error.
 //! * Deserialisation: structs ignore names, enums are externally tagged (`Unit`, `Newtype(x)`,
 //!   `Tuple(1, 2)`, `Struct(a: 1)`), options accept `None`, `Some(x)` or a bare `x`, integers
@@ -55,7 +55,7 @@ pub fn load<T: DeserializeOwned>(
     overrides: &[String],
 ) -> Result<T, ConfigError> {
     let document = load_document(path, overrides)?;
-    from_node(&document).map_err(|e| overrides::attribute(e, overrides))
+    from_node(&document)
 }
 
 /// Loads a `T` from RON `text`, called `file_name` in errors; `#include` paths in it are
@@ -67,7 +67,7 @@ pub fn from_str<T: DeserializeOwned>(
 ) -> Result<T, ConfigError> {
     let mut document = include::load_text(text, file_name)?;
     overrides::apply(&mut document, overrides)?;
-    from_node(&document).map_err(|e| overrides::attribute(e, overrides))
+    from_node(&document)
 }
 
 /// Loads the RON file at `path` as a merged document tree, with includes resolved and
@@ -112,7 +112,7 @@ pub fn parse_document(
 }
 
 /// Deserialises a `T` from a document tree. Errors about values set by overrides name the
-/// file `<override N>`; [`load`] and [`from_str`] also append the override's text.
+/// override as written (``override `sim.dt="fast"`: sim.dt: invalid type: …``).
 pub fn from_node<T: DeserializeOwned>(node: &Node) -> Result<T, ConfigError> {
     de::from_node(node)
 }
@@ -126,15 +126,6 @@ pub fn merge(base: &mut Node, top: Node) {
 /// Applies command-line style overrides (`a.b[0]["k"]=value`) to a document tree in order.
 pub fn apply_overrides(document: &mut Node, overrides: &[String]) -> Result<(), ConfigError> {
     overrides::apply(document, overrides)
-}
-
-/// [`from_node`] for a document that `overrides` were applied to: an error about a value an
-/// override set also shows the override's text.
-pub fn from_overridden_node<T: DeserializeOwned>(
-    node: &Node,
-    overrides: &[String],
-) -> Result<T, ConfigError> {
-    from_node(node).map_err(|e| overrides::attribute(e, overrides))
 }
 
 /// The node at a field path such as `sim.backend`, `scene.articulations[0]` or

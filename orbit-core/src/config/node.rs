@@ -7,7 +7,7 @@ use std::sync::Arc;
 /// Where a node starts: the file, and a 1-based line and column (columns count characters).
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Span {
-    /// The file the node was read from (`<override N>` for command-line overrides).
+    /// The file the node was read from (``override `path=value` `` for command-line overrides).
     pub file: Arc<PathBuf>,
     /// 1-based line.
     pub line: u32,

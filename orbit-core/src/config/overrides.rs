@@ -15,8 +15,8 @@ use super::path::{Segment, format_path, parse_path};
 
 /// Applies `overrides` in order.
 pub(crate) fn apply(root: &mut Node, overrides: &[String]) -> Result<(), ConfigError> {
-    for (i, text) in overrides.iter().enumerate() {
-        apply_one(root, text, i + 1).map_err(|message| ConfigError::Override {
+    for text in overrides {
+        apply_one(root, text).map_err(|message| ConfigError::Override {
             override_text: text.clone(),
             message,
         })?;
@@ -24,39 +24,22 @@ pub(crate) fn apply(root: &mut Node, overrides: &[String]) -> Result<(), ConfigE
     Ok(())
 }
 
-/// The pseudo file name given to the value of override number `n` (1-based).
-fn file_name(n: usize) -> PathBuf {
-    PathBuf::from(format!("<override {n}>"))
+/// The pseudo file of an override's value: the override itself, so that an error about the
+/// value names the override as the user wrote it.
+fn file_name(text: &str) -> PathBuf {
+    PathBuf::from(format!("{OVERRIDE_FILE_PREFIX}{text}`"))
 }
 
-/// Appends ``(set by override `...`)`` to a deserialisation error about a value that came from
-/// one of `overrides`.
-pub(crate) fn attribute(error: ConfigError, overrides: &[String]) -> ConfigError {
-    match error {
-        ConfigError::Invalid {
-            file,
-            line,
-            col,
-            path,
-            mut message,
-        } => {
-            let source = (1..=overrides.len()).find(|&n| file == file_name(n));
-            if let Some(text) = source.and_then(|n| overrides.get(n - 1)) {
-                message += &format!(" (set by override `{text}`)");
-            }
-            ConfigError::Invalid {
-                file,
-                line,
-                col,
-                path,
-                message,
-            }
-        }
-        other => other,
-    }
+/// How the pseudo file of an override's value starts ([`file_name`]).
+const OVERRIDE_FILE_PREFIX: &str = "override `";
+
+/// Whether `file` is the pseudo file of an override's value (which has no lines to point at).
+pub(crate) fn is_override_file(file: &std::path::Path) -> bool {
+    file.to_str()
+        .is_some_and(|f| f.starts_with(OVERRIDE_FILE_PREFIX) && f.ends_with('`'))
 }
 
-fn apply_one(root: &mut Node, text: &str, n: usize) -> Result<(), String> {
+fn apply_one(root: &mut Node, text: &str) -> Result<(), String> {
     let (segments, rest) = parse_path(text)?;
     let rest = rest.trim_start();
     let Some(value_text) = rest.strip_prefix('=') else {
@@ -69,18 +52,19 @@ fn apply_one(root: &mut Node, text: &str, n: usize) -> Result<(), String> {
             ),
         });
     };
-    let value = parser::parse_value(value_text, Arc::new(file_name(n))).map_err(|e| match e {
-        ConfigError::Parse {
-            line: 1,
-            col,
-            message,
-            ..
-        } => {
-            let offset = (text.len() - value_text.len()) as u32;
-            format!("bad value at column {}: {message}", offset + col)
-        }
-        other => format!("bad value: {other}"),
-    })?;
+    let value =
+        parser::parse_value(value_text, Arc::new(file_name(text))).map_err(|e| match e {
+            ConfigError::Parse {
+                line: 1,
+                col,
+                message,
+                ..
+            } => {
+                let offset = (text.len() - value_text.len()) as u32;
+                format!("bad value at column {}: {message}", offset + col)
+            }
+            other => format!("bad value: {other}"),
+        })?;
     set(root, &segments, value)
 }
 

@@ -3,6 +3,7 @@
 //! arrays: one array per quantity). All poses are relative to each env's own origin.
 
 mod contact;
+mod health;
 mod layout;
 mod registry;
 
@@ -10,6 +11,7 @@ use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 pub use contact::{ContactCfg, ContactModel};
+pub use health::*;
 pub use layout::*;
 pub use registry::*;
 

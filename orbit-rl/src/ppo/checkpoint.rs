@@ -13,13 +13,20 @@ impl Ppo {
     /// Saves the network and the optimiser state as burnpack files `<base>.bpk` and
     /// `<base>.adam.bpk`.
     pub fn save(&self, base: &Path) -> Result<(), RlError> {
-        let model_path = base.with_extension("bpk");
+        self.save_files(
+            &base.with_extension("bpk"),
+            &base.with_extension("adam.bpk"),
+        )
+    }
+
+    /// Saves the network to `model_path` and the optimiser state to `adam_path` (burnpack
+    /// files, whatever the names).
+    pub fn save_files(&self, model_path: &Path, adam_path: &Path) -> Result<(), RlError> {
         self.model
             .clone()
-            .save_file(&model_path)
+            .save_file(model_path)
             .map_err(|e| RlError::checkpoint(model_path, e))?;
-        self.optimizer
-            .save(&self.model, &base.with_extension("adam.bpk"))
+        self.optimizer.save(&self.model, adam_path)
     }
 
     /// Loads the network (and, if `with_optimizer`, the optimiser state) saved by [`Ppo::save`].

@@ -1,0 +1,108 @@
+//! A check that a backend's state is still physical after a step: no NaN or infinity, and no
+//! value far beyond anything a robot-learning scene reaches. A step that breaks this (a time
+//! step too long for the stiffness, too few solver iterations) is reported as a physics
+//! failure, before its NaNs reach rewards and the learner.
+
+use glam::Vec3;
+
+use super::PhysicsBackend;
+
+/// Joint positions beyond this magnitude (rad or m) mean the state blew up.
+pub const MAX_JOINT_POSITION: f32 = 1.0e4;
+/// Joint speeds beyond this (rad/s or m/s) mean the state blew up.
+pub const MAX_JOINT_VELOCITY: f32 = 1.0e4;
+/// Object positions farther than this from the env origin, per axis (m).
+pub const MAX_OBJECT_POSITION: f32 = 1.0e3;
+/// Object speeds beyond this, per axis (m/s).
+pub const MAX_OBJECT_LINEAR_VELOCITY: f32 = 1.0e3;
+/// Object angular speeds beyond this, per axis (rad/s).
+pub const MAX_OBJECT_ANGULAR_VELOCITY: f32 = 1.0e4;
+
+/// The first quantity found beyond its limit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instability {
+    /// What was out of range, e.g. "joint velocity `panda_joint4` of articulation `robot`".
+    pub quantity: String,
+    /// The first env holding such a value.
+    pub env: usize,
+    /// Its value (NaN, infinite or beyond `limit`).
+    pub value: f32,
+    /// The limit of the quantity.
+    pub limit: f32,
+    /// Envs whose value of this quantity is out of range.
+    pub envs_affected: usize,
+    /// All envs.
+    pub num_envs: usize,
+}
+
+impl std::fmt::Display for Instability {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} is {} in env {} (allowed: magnitude at most {:e}; {} of {} envs out of range)",
+            self.quantity, self.value, self.env, self.limit, self.envs_affected, self.num_envs
+        )
+    }
+}
+
+/// The first out-of-range quantity in `backend`'s joint states and free-object states, if any.
+/// Scans on every core; finds the same one whatever the number of threads. Link poses are
+/// not scanned: they follow from the joint states.
+pub fn check_state(backend: &dyn PhysicsBackend) -> Option<Instability> {
+    let layout = backend.layout();
+    let num_envs = backend.num_envs();
+    for (a, art) in layout.articulations.iter().enumerate() {
+        let view = backend.articulation(a);
+        let dofs = art.joint_names.len();
+        for (values, what, limit) in [
+            (view.joint_pos, "joint position", MAX_JOINT_POSITION),
+            (view.joint_vel, "joint velocity", MAX_JOINT_VELOCITY),
+        ] {
+            if let Some(i) = crate::parallel::first_beyond(values, limit) {
+                let joint = &art.joint_names[i % dofs];
+                return Some(Instability {
+                    quantity: format!("{what} of joint `{joint}` of articulation `{}`", art.name),
+                    env: i / dofs,
+                    value: values[i],
+                    limit,
+                    envs_affected: rows_beyond(values, dofs, limit),
+                    num_envs,
+                });
+            }
+        }
+    }
+    for (o, name) in layout.rigid_objects.iter().enumerate() {
+        let view = backend.rigid_object(o);
+        for (values, what, limit) in [
+            (view.pos, "position", MAX_OBJECT_POSITION),
+            (view.lin_vel, "linear velocity", MAX_OBJECT_LINEAR_VELOCITY),
+            (
+                view.ang_vel,
+                "angular velocity",
+                MAX_OBJECT_ANGULAR_VELOCITY,
+            ),
+        ] {
+            let flat: &[f32] = bytemuck::cast_slice::<Vec3, f32>(values);
+            if let Some(i) = crate::parallel::first_beyond(flat, limit) {
+                let axis = ["x", "y", "z"][i % 3];
+                return Some(Instability {
+                    quantity: format!("{what} ({axis}) of object `{name}`"),
+                    env: i / 3,
+                    value: flat[i],
+                    limit,
+                    envs_affected: rows_beyond(flat, 3, limit),
+                    num_envs,
+                });
+            }
+        }
+    }
+    None
+}
+
+/// Rows of `dim` values holding a value beyond `limit` (or NaN).
+fn rows_beyond(values: &[f32], dim: usize, limit: f32) -> usize {
+    values
+        .chunks(dim)
+        .filter(|row| crate::parallel::first_beyond(row, limit).is_some())
+        .count()
+}
