@@ -187,3 +187,23 @@ fn examples_print_error_messages_not_debug_structs() {
         );
     }
 }
+
+/// `--num-envs 100000000` on the CPU backend fails at once with the memory it would need,
+/// instead of allocating until the machine runs out.
+#[test]
+fn envs_beyond_the_memory_fail_fast() {
+    let args = AgentArgs::parse_from([
+        "zero_agent",
+        "--num-envs",
+        "100000000",
+        "--steps",
+        "1",
+        "--backend",
+        "rapier",
+    ]);
+    let message = run(&args, true).unwrap_err().to_string();
+    assert!(
+        message.contains("100000000 envs on the `rapier` backend need at least"),
+        "{message}"
+    );
+}

@@ -8,7 +8,7 @@ use orbit_core::scene::{ArticulationModel, AssetSource, SceneCfg, SceneDesc};
 
 use crate::compose::compose_scene;
 use crate::error::AssetError;
-use crate::urdf::{model_from_urdf_file, model_from_urdf_str};
+use crate::urdf::{UrdfOptions, model_from_urdf_file_with, model_from_urdf_str_with};
 
 /// Bundled files: (file name, contents).
 const BUNDLED: &[(&str, &str)] = &[
@@ -109,17 +109,23 @@ pub fn load_model(
 ) -> Result<ArticulationModel, AssetError> {
     match source {
         AssetSource::Model(model) => Ok(model.clone()),
-        AssetSource::Urdf { path } => {
+        AssetSource::Urdf {
+            path,
+            skip_mesh_collisions,
+        } => {
+            let options = UrdfOptions {
+                skip_mesh_collisions: *skip_mesh_collisions,
+            };
             let given = Path::new(path);
             let candidate = match base_dir {
                 Some(base) if given.is_relative() => base.join(given),
                 _ => given.to_path_buf(),
             };
             if candidate.is_file() {
-                return model_from_urdf_file(&candidate);
+                return model_from_urdf_file_with(&candidate, options);
             }
             if let Some(text) = bundled(path) {
-                return model_from_urdf_str(text, &format!("{path} (bundled)"));
+                return model_from_urdf_str_with(text, &format!("{path} (bundled)"), options);
             }
             Err(AssetError::NotFound {
                 path: path.clone(),

@@ -31,4 +31,7 @@ pub use bundled::{
 pub use compose::{compose_env_scene, compose_scene};
 pub use error::AssetError;
 pub use inventory;
-pub use urdf::{model_from_urdf_file, model_from_urdf_str};
+pub use urdf::{
+    UrdfOptions, model_from_urdf_file, model_from_urdf_file_with, model_from_urdf_str,
+    model_from_urdf_str_with,
+};

@@ -10,8 +10,9 @@
 //! - Joint types: `revolute` and `prismatic` (limited), `continuous` (a revolute joint without
 //!   position limits), `fixed`. `floating`, `planar` and `spherical` are rejected.
 //! - Collision geometry: `box`, `sphere`, `cylinder` and `capsule` become primitive shapes with
-//!   the default [`Material`] (URDF has no standard friction). `mesh` collisions are skipped
-//!   with a warning: they are never silently approximated.
+//!   the default [`Material`] (URDF has no standard friction). A `mesh` collision is an error,
+//!   never silently approximated or dropped; with [`UrdfOptions::skip_mesh_collisions`] (an
+//!   asset config's `skip_mesh_collisions: true`) it is left out with a warning.
 //!
 //! Extension: URDF cannot express collision filtering, so the importer also reads
 //! `<orbit_collision_filter link="NAME" groups="G" mask="M"/>` elements (children of `<robot>`,
@@ -32,14 +33,30 @@ use crate::error::AssetError;
 /// Name of the collision-filter extension element.
 const FILTER_ELEMENT: &[u8] = b"orbit_collision_filter";
 
+/// Choices of the URDF import.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UrdfOptions {
+    /// Leave `mesh` collision shapes out (with a warning) instead of refusing the file: the
+    /// link then has no collision there.
+    pub skip_mesh_collisions: bool,
+}
+
 /// Reads a URDF file and imports it (see [`model_from_urdf_str`]). Errors name the file path.
 pub fn model_from_urdf_file(path: &Path) -> Result<ArticulationModel, AssetError> {
+    model_from_urdf_file_with(path, UrdfOptions::default())
+}
+
+/// [`model_from_urdf_file`] with import options.
+pub fn model_from_urdf_file_with(
+    path: &Path,
+    options: UrdfOptions,
+) -> Result<ArticulationModel, AssetError> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|source| AssetError::Io {
         file: file.clone(),
         source,
     })?;
-    model_from_urdf_str(&text, &file)
+    model_from_urdf_str_with(&text, &file, options)
 }
 
 /// Imports a URDF document. `source_name` (a path or an asset name) is used in error messages
@@ -50,6 +67,15 @@ pub fn model_from_urdf_file(path: &Path) -> Result<ArticulationModel, AssetError
 /// [`ArticulationModel::merge_fixed_joints`] to fold them into named frames. The result passes
 /// [`ArticulationModel::validate`].
 pub fn model_from_urdf_str(text: &str, source_name: &str) -> Result<ArticulationModel, AssetError> {
+    model_from_urdf_str_with(text, source_name, UrdfOptions::default())
+}
+
+/// [`model_from_urdf_str`] with import options.
+pub fn model_from_urdf_str_with(
+    text: &str,
+    source_name: &str,
+    options: UrdfOptions,
+) -> Result<ArticulationModel, AssetError> {
     let robot = urdf_rs::read_from_string(text).map_err(|e| AssetError::Parse {
         file: source_name.to_string(),
         message: e.to_string(),
@@ -58,6 +84,7 @@ pub fn model_from_urdf_str(text: &str, source_name: &str) -> Result<Articulation
     Importer {
         file: source_name,
         robot: &robot,
+        options,
     }
     .build(&filters)
 }
@@ -138,6 +165,7 @@ fn read_collision_filters(
 struct Importer<'a> {
     file: &'a str,
     robot: &'a urdf_rs::Robot,
+    options: UrdfOptions,
 }
 
 impl Importer<'_> {
@@ -552,14 +580,24 @@ impl Importer<'_> {
                         half_length: (*length * 0.5) as f32,
                     }
                 }
-                urdf_rs::Geometry::Mesh { filename, .. } => {
+                urdf_rs::Geometry::Mesh { filename, .. } if self.options.skip_mesh_collisions => {
                     tracing::warn!(
-                        "{}: {element}: mesh `{filename}` skipped; orbit-rs collides primitives \
-                         only, so this collision is absent. Replace it with boxes, spheres, \
-                         cylinders or capsules",
+                        "{}: {element}: mesh `{filename}` skipped (`skip_mesh_collisions`); this \
+                         collision is absent",
                         self.file
                     );
                     continue;
+                }
+                urdf_rs::Geometry::Mesh { filename, .. } => {
+                    return Err(self.invalid(
+                        element,
+                        format!(
+                            "mesh `{filename}`: orbit-rs collides primitives only; replace it \
+                             with boxes, spheres, cylinders or capsules, or set \
+                             `skip_mesh_collisions: true` in the asset's `spawn: Urdf(…)` to \
+                             leave it out"
+                        ),
+                    ));
                 }
             };
             shapes.push(Shape {

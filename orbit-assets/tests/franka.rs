@@ -18,6 +18,7 @@ fn franka() -> ArticulationModel {
     load_model(
         &AssetSource::Urdf {
             path: "franka_panda_rod.urdf".into(),
+            skip_mesh_collisions: false,
         },
         None,
     )

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use orbit_assets::{AssetError, model_from_urdf_file};
+use orbit_assets::{AssetError, UrdfOptions, model_from_urdf_file, model_from_urdf_file_with};
 
 fn path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -214,11 +214,22 @@ fn missing_file() {
     assert!(e.to_string().contains("does_not_exist.urdf"), "{e}");
 }
 
-/// Mesh collisions are skipped with a warning, not an error and not approximated.
+/// A mesh collision is an error naming the link's collision and the way out, never dropped
+/// silently; with `skip_mesh_collisions` the file loads without those shapes.
 #[test]
-fn mesh_only_collision_loads_without_shapes() {
-    let model = model_from_urdf_file(&path("mesh_only_collision.urdf"))
-        .expect("mesh-only collisions load (with a warning)");
+fn mesh_collision_is_an_error_unless_skipped() {
+    let file = path("mesh_only_collision.urdf");
+    let e = model_from_urdf_file(&file).unwrap_err();
+    let message = e.to_string();
+    assert!(matches!(e, AssetError::InvalidValue { .. }), "{e:?}");
+    assert!(
+        message.contains("mesh `") && message.contains("skip_mesh_collisions: true"),
+        "{message}"
+    );
+    let options = UrdfOptions {
+        skip_mesh_collisions: true,
+    };
+    let model = model_from_urdf_file_with(&file, options).expect("loads without the meshes");
     assert_eq!(model.links.len(), 2);
     assert!(model.links.iter().all(|l| l.shapes.is_empty()));
 }

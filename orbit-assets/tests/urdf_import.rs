@@ -1,7 +1,9 @@
 //! URDF import facts on small hand-written documents.
 
 use glam::{DMat3, DVec3, Mat3, Vec3};
-use orbit_assets::{AssetError, load_model, model_from_urdf_str};
+use orbit_assets::{
+    AssetError, UrdfOptions, load_model, model_from_urdf_str, model_from_urdf_str_with,
+};
 use orbit_core::scene::{AssetSource, CollisionFilter, Geometry, JointKind};
 
 const INERTIAL: &str = r#"<inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>"#;
@@ -166,7 +168,8 @@ fn links_are_topologically_sorted() {
 }
 
 /// Collision primitives: sizes converted to half extents / half lengths, origins kept; meshes
-/// skipped; the `<orbit_collision_filter>` extension sets the link's filter.
+/// skipped when the import is told to; the `<orbit_collision_filter>` extension sets the
+/// link's filter.
 #[test]
 fn collision_shapes_and_filters() {
     let text = robot(
@@ -179,7 +182,10 @@ fn collision_shapes_and_filters() {
         </link>
         <orbit_collision_filter link="a" groups="0x4" mask="3"/>"#,
     );
-    let model = model_from_urdf_str(&text, "shapes.urdf").unwrap();
+    let options = UrdfOptions {
+        skip_mesh_collisions: true,
+    };
+    let model = model_from_urdf_str_with(&text, "shapes.urdf", options).unwrap();
     let shapes = &model.links[0].shapes;
     assert_eq!(shapes.len(), 4, "the mesh is skipped");
     assert_eq!(
@@ -258,7 +264,10 @@ fn load_model_resolution() {
         robot(&format!(r#"<link name="only">{INERTIAL}</link>"#)),
     )
     .unwrap();
-    let src = |p: &str| AssetSource::Urdf { path: p.into() };
+    let src = |p: &str| AssetSource::Urdf {
+        path: p.into(),
+        skip_mesh_collisions: false,
+    };
 
     let m = load_model(&src("one.urdf"), Some(&dir)).unwrap();
     assert_eq!(m.links[0].name, "only");

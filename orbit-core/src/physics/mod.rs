@@ -5,6 +5,7 @@
 mod contact;
 mod health;
 mod layout;
+mod memory;
 mod registry;
 
 use glam::{Quat, Vec3};
@@ -13,6 +14,7 @@ use serde::{Deserialize, Serialize};
 pub use contact::{ContactCfg, ContactModel};
 pub use health::*;
 pub use layout::*;
+pub use memory::*;
 pub use registry::*;
 
 use crate::scene::RootState;

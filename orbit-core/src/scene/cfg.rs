@@ -39,6 +39,10 @@ pub enum AssetSource {
     Urdf {
         /// File name or path.
         path: String,
+        /// Leave `mesh` collision shapes out (with a warning) instead of refusing the file:
+        /// orbit-rs collides primitives only.
+        #[serde(default)]
+        skip_mesh_collisions: bool,
     },
     /// A model written out in the config itself.
     Model(ArticulationModel),
