@@ -34,7 +34,16 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
         .iter()
         .map(|o| crate::env_override(o))
         .collect();
-    let overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &user);
+    let mut overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &user);
+    let configs = crate::RunConfigs::resolve(
+        args.task.as_deref(),
+        crate::envs::DEFAULT_STEP_TASK,
+        e.task_config.as_deref(),
+        None,
+        None,
+    )?;
+    let backend = crate::choose_run_backend(&configs.env, &overrides)?;
+    overrides.push(format!("sim.backend={:?}", backend.name));
     let (mut env, name) =
         crate::make_env(args.task.as_deref(), e.task_config.as_deref(), &overrides)?;
     env.reset()?;

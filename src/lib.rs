@@ -86,7 +86,8 @@ pub struct EnvArgs {
     /// Seed (default: the config's).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Physics backend (`rapier` on the CPU, `wgpu` on the GPU).
+    /// Physics backend: `auto` (the tasks' default: a GPU adapter, else Mesa's lavapipe, else
+    /// rapier), `wgpu` (Vulkan: a GPU or lavapipe) or `rapier` (CPU).
     #[arg(long)]
     pub backend: Option<String>,
 }
@@ -107,6 +108,28 @@ pub struct VideoArgs {
 /// accepts, removed (`env.sim.dt=0.001` and `sim.dt=0.001` are the same override).
 pub fn env_override(text: &str) -> String {
     text.strip_prefix("env.").unwrap_or(text).to_string()
+}
+
+/// The physics backend that the env config `env` with `overrides` runs on here: its
+/// `sim.backend`, or for `"auto"` the backend chosen for this machine, which is then said on
+/// standard output with the reason (and how to get a faster device when one is missing).
+pub fn choose_run_backend(
+    env: &std::path::Path,
+    overrides: &[String],
+) -> Result<core::physics::BackendChoice, managers::EnvError> {
+    let doc = managers::load_env_config(env, overrides)?;
+    let name: String = match core::config::node_at(&doc, "sim.backend") {
+        Some(node) => core::config::from_node(node)?,
+        None => core::physics::AUTO_BACKEND.to_string(),
+    };
+    let choice = core::physics::choose_backend(&name)?;
+    if let Some(reason) = &choice.reason {
+        println!(
+            "physics: `{}` (sim.backend \"auto\" chose it, {reason})",
+            choice.name
+        );
+    }
+    Ok(choice)
 }
 
 /// Common command-line flags of the examples (Isaac Lab's names), turned into overrides.

@@ -161,20 +161,39 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     crate::link_registrations();
     check_task(args.task.as_deref())?;
     let e = &args.env;
-    let configs = crate::RunConfigs::resolve(
+    let mut configs = crate::RunConfigs::resolve(
         args.task.as_deref(),
         crate::DEFAULT_TASK,
         e.task_config.as_deref(),
         args.agent_config.as_deref(),
         args.bb_config.as_deref(),
-    )
-    .map_err(|err| RlError::EnvMismatch(err.to_string()))?;
-    let agent_file = agent_file(&configs)?;
+    )?;
     let Overrides {
         env: user_env,
         agent: mut agent_overrides,
         black_box: black_box_overrides,
     } = split_overrides(&args.overrides);
+    // The backend is fixed before the agent config is chosen: physics on the CPU trains with
+    // the task's config sized for CPUs, if it has one.
+    let backend = crate::choose_run_backend(
+        &configs.env,
+        &crate::run_overrides(None, None, args.env.backend.as_deref(), &user_env),
+    )?;
+    if backend.probe.kind.is_cpu()
+        && let Some(cpu_agent) = configs.cpu_agent.take()
+    {
+        println!(
+            "training config: {} (the physics runs on the CPU; --agent-config {} trains with \
+             the GPU-sized one)",
+            cpu_agent.display(),
+            configs
+                .agent
+                .as_ref()
+                .map_or(String::new(), |a| a.display().to_string())
+        );
+        configs.agent = Some(cpu_agent);
+    }
+    let agent_file = agent_file(&configs)?;
     check_black_box_overrides(&configs, &black_box_overrides)?;
     if let Some(s) = args.env.seed {
         agent_overrides.push(format!("seed={s}"));
@@ -198,10 +217,11 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     agent.validate(&agent_file.display().to_string())?;
     let mut env_overrides = agent.env_overrides.clone();
     env_overrides.extend(user_env);
+    // The chosen backend, not `auto`: `params/env.ron` repeats the run on the same one.
     env_overrides.extend(crate::run_overrides(
         args.env.num_envs,
         Some(agent.seed),
-        args.env.backend.as_deref(),
+        Some(&backend.name),
         &[],
     ));
     Ok(ResolvedRun {
@@ -298,19 +318,46 @@ pub fn train(
     train_with(args, show_progress, None)
 }
 
-/// A flag that the first SIGINT (Ctrl-C) or SIGTERM sets; a second one ends the process at once
-/// with exit code 130. Pass it to [`train_with`] to stop training with a checkpoint.
+/// Signals within this time of the first one count as the same request: a wrapper such as
+/// `timeout` sends its signal to the command and again to its process group.
+const SIGNAL_GRACE: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// A flag that the first SIGINT (Ctrl-C) or SIGTERM sets; a later one (more than a second
+/// after it) ends the process at once with exit code 130. Pass it to [`train_with`] to stop
+/// training with a checkpoint.
 pub fn stop_on_signals() -> Result<Arc<AtomicBool>, RlError> {
     let stop = Arc::new(AtomicBool::new(false));
+    // Nanoseconds after `origin` of the first signal (0: none yet).
+    let first = Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let origin = std::time::Instant::now();
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        let register = || {
-            // The order matters: the exit hook sees the flag the first signal set.
-            signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&stop))?;
-            signal_hook::flag::register(signal, Arc::clone(&stop))
+        let (stop, first) = (Arc::clone(&stop), Arc::clone(&first));
+        let handler = move || {
+            let now = (origin.elapsed().as_nanos() as u64).max(1);
+            if on_signal(&first, &stop, now) {
+                signal_hook::low_level::exit(130)
+            }
         };
-        register().map_err(|e| RlError::Device(format!("installing a signal handler: {e}")))?;
+        // SAFETY: the handler only reads the monotonic clock (clock_gettime), uses atomics and
+        // calls `_exit`, all async-signal-safe; it allocates and locks nothing.
+        unsafe { signal_hook::low_level::register(signal, handler) }
+            .map_err(|e| RlError::Device(format!("installing a signal handler: {e}")))?;
     }
     Ok(stop)
+}
+
+/// What a stop signal at `now` (nanoseconds, > 0) does: the first sets `stop` and is recorded
+/// in `first`; one within [`SIGNAL_GRACE`] of it does nothing; a later one asks for an exit
+/// (returns true). Only atomics: it runs in a signal handler.
+fn on_signal(first: &std::sync::atomic::AtomicU64, stop: &AtomicBool, now: u64) -> bool {
+    use std::sync::atomic::Ordering::SeqCst;
+    match first.compare_exchange(0, now, SeqCst, SeqCst) {
+        Ok(_) => {
+            stop.store(true, SeqCst);
+            false
+        }
+        Err(at) => now.saturating_sub(at) > SIGNAL_GRACE.as_nanos() as u64,
+    }
 }
 
 /// [`train`], stopping with a checkpoint ([`RlError::Interrupted`]) once `stop` is set.
@@ -489,8 +536,10 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     )?;
     let policy = Policy::load(&base, Device::flex())?;
     let e = &args.env;
-    let env_overrides =
+    let mut env_overrides =
         crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &overrides.env);
+    let backend = crate::choose_run_backend(&configs.env, &env_overrides)?;
+    env_overrides.push(format!("sim.backend={:?}", backend.name));
     let video = args.video.video.then(|| {
         let run_dir = base.parent().unwrap_or(Path::new("."));
         VideoCfg {
@@ -570,6 +619,18 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The first signal requests the stop; a repeat within a second (a wrapper's second
+    /// delivery) is the same request; one after that aborts.
+    #[test]
+    fn a_second_signal_aborts_only_after_the_grace_time() {
+        let (first, stop) = (std::sync::atomic::AtomicU64::new(0), AtomicBool::new(false));
+        let second = 1_000_000_000u64;
+        assert!(!on_signal(&first, &stop, 5 * second));
+        assert!(stop.load(std::sync::atomic::Ordering::SeqCst));
+        assert!(!on_signal(&first, &stop, 5 * second + second / 10));
+        assert!(on_signal(&first, &stop, 6 * second + second / 10));
+    }
 
     /// A metric logged as a mean over 3 resets (1.0) and then over 1 reset (0.0) is 0.75 over
     /// the four episodes, not the 0.5 of the two step means; the mean return is exact.

@@ -17,5 +17,5 @@ pub mod vec_env;
 
 pub use black_box::{BlackBoxCfg, BlackBoxEnv};
 pub use error::VecEnvError;
-pub use make::{BoxedVecEnv, DEFAULT_TASK, RunConfigs, make_env, make_vec_env};
+pub use make::{BoxedVecEnv, DEFAULT_STEP_TASK, DEFAULT_TASK, RunConfigs, make_env, make_vec_env};
 pub use vec_env::{RlVecEnv, VecEnv, VecEnvStep};

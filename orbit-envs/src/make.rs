@@ -22,6 +22,8 @@ pub struct RunConfigs {
     pub agent: Option<PathBuf>,
     /// The black-box wrapper config of an episodic task.
     pub black_box: Option<PathBuf>,
+    /// The training config for physics on the CPU (none when a training config was given).
+    pub cpu_agent: Option<PathBuf>,
 }
 
 impl RunConfigs {
@@ -40,6 +42,7 @@ impl RunConfigs {
                 env: file.to_path_buf(),
                 agent: None,
                 black_box: None,
+                cpu_agent: None,
             },
             (id, _) => {
                 let t = orbit_managers::task(id.unwrap_or(default_task))?;
@@ -48,6 +51,7 @@ impl RunConfigs {
                     env: t.env,
                     agent: t.agent,
                     black_box: t.black_box,
+                    cpu_agent: t.cpu_agent,
                 }
             }
         };
@@ -58,10 +62,14 @@ impl RunConfigs {
             env: file(task_config, Some(registered.env)).expect("given or registered"),
             agent: file(agent_config, registered.agent),
             black_box: file(bb_config, registered.black_box),
+            cpu_agent: registered.cpu_agent.filter(|_| agent_config.is_none()),
             name: registered.name,
         })
     }
 }
+
+/// The task of the scripts that step an env without learning when none is named.
+pub const DEFAULT_STEP_TASK: &str = "BoxPushing-Torque-Franka-v0";
 
 /// The step-based env of `task` (default: the torque box-pushing task) or of the env file
 /// `task_config` with overrides, and its name, for the scripts that step an env without
@@ -71,8 +79,7 @@ pub fn make_env(
     task_config: Option<&Path>,
     overrides: &[String],
 ) -> Result<(orbit_managers::ManagerBasedRlEnv, String), orbit_managers::EnvError> {
-    let configs =
-        RunConfigs::resolve(task, "BoxPushing-Torque-Franka-v0", task_config, None, None)?;
+    let configs = RunConfigs::resolve(task, DEFAULT_STEP_TASK, task_config, None, None)?;
     Ok((
         orbit_managers::make_from_file(&configs.env, overrides)?,
         configs.name,

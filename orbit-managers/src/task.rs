@@ -15,6 +15,7 @@
 //!             env: "env/reach.ron",
 //!             agent: Some("agents/ppo.ron"),
 //!             black_box: None,
+//!             cpu_agent: None,
 //!         }],
 //!     }
 //! }
@@ -44,6 +45,19 @@ pub struct TaskDef {
     /// The black-box wrapper config: set for episodic tasks, one movement primitive per
     /// episode (Fancy Gym's `fancy_ProMP/…` ids).
     pub black_box: Option<&'static str>,
+    /// A training config sized for physics on the CPU (Mesa's lavapipe or rapier), which
+    /// `train` uses instead of `agent` when the run's physics is on the CPU.
+    pub cpu_agent: Option<&'static str>,
+}
+
+impl TaskDef {
+    /// This task with a training config for physics on the CPU.
+    pub const fn with_cpu_agent(self, cpu_agent: &'static str) -> Self {
+        Self {
+            cpu_agent: Some(cpu_agent),
+            ..self
+        }
+    }
 }
 
 /// A crate's bundled config files and its tasks:
@@ -80,6 +94,8 @@ pub struct Task {
     pub agent: Option<PathBuf>,
     /// The black-box wrapper config of an episodic task.
     pub black_box: Option<PathBuf>,
+    /// The training config for physics on the CPU, if the task has one.
+    pub cpu_agent: Option<PathBuf>,
 }
 
 impl Task {
@@ -96,6 +112,7 @@ impl Task {
             env: full(def.env),
             agent: def.agent.map(full),
             black_box: def.black_box.map(full),
+            cpu_agent: def.cpu_agent.map(full),
         }
     }
 }

@@ -17,9 +17,9 @@ mod hooks;
 use glam::{Quat, Vec3};
 use orbit_core::math::Pose;
 use orbit_core::physics::{
-    ArticulationView, BackendRegistration, BodyRef, PhysicsBackend, PhysicsError, RigidObjectView,
-    SceneLayout, SimCfg, check_batch, check_dof_ids, check_env_ids, check_root_states,
-    check_values,
+    ArticulationView, BackendProbe, BackendRegistration, BodyRef, DeviceKind, PhysicsBackend,
+    PhysicsError, RigidObjectView, SceneLayout, SimCfg, check_batch, check_dof_ids, check_env_ids,
+    check_root_states, check_values,
 };
 use orbit_core::scene::{Inertial, JointDrive, RootState, SceneDesc};
 use rayon::prelude::*;
@@ -36,6 +36,13 @@ inventory::submit! {
         name: BACKEND_NAME,
         description: "CPU: one rapier3d world per env, stepped in parallel with rayon",
         build: |scene, num_envs, sim| Ok(Box::new(RapierBackend::new(scene, num_envs, sim)?)),
+        probe: || BackendProbe {
+            kind: DeviceKind::Cpu,
+            detail: format!(
+                "rapier on {} CPU threads",
+                std::thread::available_parallelism().map_or(1, |n| n.get())
+            ),
+        },
     }
 }
 

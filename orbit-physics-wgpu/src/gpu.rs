@@ -5,6 +5,8 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
+use orbit_core::physics::{BackendProbe, DeviceKind};
+
 /// A wgpu device and its queue, with the instance and adapter they came from (so another wgpu
 /// user, such as burn's learner, can share the device).
 pub struct Gpu {
@@ -75,8 +77,9 @@ async fn create() -> Result<Gpu, String> {
         .await
         .map_err(|e| {
             format!(
-                "no Vulkan adapter ({e}); install a Vulkan driver (Debian: `mesa-vulkan-drivers` \
-                 for the lavapipe CPU driver, or the NVIDIA driver with `libvulkan1`)"
+                "no Vulkan adapter ({e}); install a Vulkan driver: Mesa's lavapipe runs the GPU \
+                 kernel on the CPU (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers \
+                 libvulkan1`), a GPU needs its vendor's driver and `libvulkan1`"
             )
         })?;
     let info = adapter.get_info();
@@ -109,6 +112,36 @@ async fn create() -> Result<Gpu, String> {
         limits,
         pipelines: Mutex::new(HashMap::new()),
     })
+}
+
+/// What this backend runs on here: the Vulkan adapter's kind and name, or why there is none
+/// and how to install Mesa's lavapipe (a CPU driver, several times rapier's speed on a CPU).
+pub fn probe() -> BackendProbe {
+    match gpu() {
+        Ok(gpu) => {
+            let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
+            BackendProbe {
+                kind: if cpu {
+                    DeviceKind::CpuVulkan
+                } else {
+                    DeviceKind::Gpu
+                },
+                detail: format!(
+                    "wgpu on the Vulkan adapter `{}`{}",
+                    gpu.info.name,
+                    if cpu {
+                        " (a CPU driver; no GPU adapter)"
+                    } else {
+                        ""
+                    }
+                ),
+            }
+        }
+        Err(e) => BackendProbe {
+            kind: DeviceKind::Unavailable,
+            detail: e,
+        },
+    }
 }
 
 /// For tests: whether a GPU is available. Without one it prints `SKIPPED: …` and returns

@@ -38,5 +38,6 @@ inventory::submit! {
         name: BACKEND_NAME,
         description: "GPU: all envs in one WGSL compute kernel (wgpu, Vulkan)",
         build: |scene, num_envs, sim| Ok(Box::new(WgpuBackend::new(scene, num_envs, sim)?)),
+        probe: gpu::probe,
     }
 }

@@ -33,7 +33,8 @@ pub struct SimCfg {
     /// wgpu 12 sweeps with MuJoCo's contacts, 4 with the soft step).
     #[serde(default)]
     pub solver_iterations: usize,
-    /// Name of the physics backend (`"rapier"`, `"wgpu"`).
+    /// Name of the physics backend (`"rapier"`, `"wgpu"`), or `"auto"`: a GPU if there is one,
+    /// else Mesa's lavapipe, else rapier.
     #[serde(default = "default_backend")]
     pub backend: String,
     /// Worker threads for CPU backends (0 = one per core).
@@ -51,7 +52,7 @@ fn default_gravity() -> Vec3 {
     Vec3::new(0.0, 0.0, -9.81)
 }
 fn default_backend() -> String {
-    "rapier".to_string()
+    AUTO_BACKEND.to_string()
 }
 
 impl Default for SimCfg {

@@ -35,7 +35,8 @@ const TASKS: &[TaskDef] = &[
     task("BoxPushing-Torque-RandomInit-Franka-v0", "env/torque_random_init.ron", None, None,
         "Franka box pushing, torque law, Dense reward, random initial box pose with the arm placed by IK"),
     task("BoxPushing-JointPos-Franka-v0", "env/joint_pos.ron", Some(PPO), None,
-        "Franka box pushing, joint position targets through implicit PD (k 400, d 80), Dense reward"),
+        "Franka box pushing, joint position targets through implicit PD (k 400, d 80), Dense reward")
+        .with_cpu_agent(PPO_CPU),
     task("BoxPushing-TaskSpace-Franka-v0", "env/task_space.ron", Some(PPO), None,
         "Franka box pushing, relative tcp pose commands through differential IK (DLS) and implicit PD, Dense reward"),
     task("BoxPushing-ProMP-Franka-v0", "env/torque.ron", Some(BBRL), Some("black_box/promp.ron"),
@@ -54,6 +55,8 @@ const TASKS: &[TaskDef] = &[
 
 /// Step-based PPO, the Orbit port's settings.
 const PPO: &str = "agents/ppo.ron";
+/// Step-based PPO sized for physics on the CPU (the default task's main job without a GPU).
+const PPO_CPU: &str = "agents/ppo_cpu.ron";
 /// BBRL-PPO, the Orbit port's black-box settings.
 const BBRL: &str = "agents/bbrl_ppo.ron";
 
@@ -70,6 +73,7 @@ const fn task(
         env,
         agent,
         black_box,
+        cpu_agent: None,
     }
 }
 
@@ -86,6 +90,7 @@ inventory::submit! {
             "env/joint_pos.ron",
             "env/task_space.ron",
             "agents/ppo.ron",
+            "agents/ppo_cpu.ron",
             "agents/bbrl_ppo.ron",
             "black_box/promp.ron",
             "black_box/promp_joint_pos.ron",

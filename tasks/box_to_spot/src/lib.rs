@@ -14,6 +14,7 @@ inventory::submit! {
             env: "box_to_spot.ron",                // paths are relative to config/
             agent: Some("agents/ppo.ron"),         // what `train` uses
             black_box: None,                       // a step-based task
+            cpu_agent: None,                       // no config sized for CPU physics
         }],
     }
 }

@@ -21,6 +21,7 @@ inventory::submit! {
             env: "env/reach.ron",
             agent: Some("agents/ppo.ron"),
             black_box: None,
+            cpu_agent: None,
         }],
     }
 }
