@@ -129,13 +129,34 @@ const SELU_ALPHA: f64 = 1.673_263_242_354_377_3;
 const SELU_SCALE: f64 = 1.050_700_987_355_480_5;
 
 /// `scale·x` for `x > 0`, `alpha·(eˣ − 1)` otherwise (ELU with `scale = alpha = 1`, SELU with
-/// its constants), written as `scale·max(x, 0) + alpha·(e^min(x, 0) − 1)`. burn's own ELU and
-/// SELU take `eˣ` of every element and mask it out where `x > 0`; for `x > 88` that is ∞ in
-/// `f32`, and the backward pass multiplies the masked-out zero gradient by it: NaN weights
-/// once a pre-activation passes 88.
+/// its constants). burn's own ELU and SELU take `eˣ` of every element and mask it out where
+/// `x > 0`; for `x > 88` that is ∞ in `f32`, and the backward pass multiplies the masked-out
+/// zero gradient by it: NaN weights once a pre-activation passes 88. Both forms below keep the
+/// exponent at or below 0 and give the same values.
 fn elu<const D: usize>(x: Tensor<D>, scale: f64, alpha: f64) -> Tensor<D> {
+    if x.device().inner() == Device::flex() {
+        elu_by_mask(x, scale, alpha)
+    } else {
+        elu_by_clamps(x, scale, alpha)
+    }
+}
+
+/// ELU as `scale·max(x, 0) + alpha·(e^min(x, 0) − 1)`: the GPU learner's form.
+fn elu_by_clamps<const D: usize>(x: Tensor<D>, scale: f64, alpha: f64) -> Tensor<D> {
     let positive = x.clone().clamp_min(0.0).mul_scalar(scale);
     let negative = x.clamp_max(0.0).exp().sub_scalar(1.0).mul_scalar(alpha);
+    positive + negative
+}
+
+/// ELU as `scale·x·m + alpha·(e^(x·(1 − m)) − 1)` with the constant mask `m = [x > 0]`: the CPU
+/// learner's form. Its backward pass is products with the mask, which burn's CPU backend
+/// vectorises, where a clamp's backward pass is an element-wise branch there (the update of
+/// box pushing's CPU config takes about a quarter less time).
+fn elu_by_mask<const D: usize>(x: Tensor<D>, scale: f64, alpha: f64) -> Tensor<D> {
+    let positive_mask = x.clone().greater_elem(0.0).float();
+    let negative_mask = positive_mask.clone().neg().add_scalar(1.0);
+    let positive = (x.clone() * positive_mask).mul_scalar(scale);
+    let negative = (x * negative_mask).exp().sub_scalar(1.0).mul_scalar(alpha);
     positive + negative
 }
 
@@ -238,6 +259,31 @@ mod tests {
         let g: Vec<f32> = x.grad(&grads).unwrap().into_data().try_into_vec().unwrap();
         assert_eq!(g[0], 1.0);
         assert!((g[1] - (-2.0f32).exp()).abs() < 1e-6, "{g:?}");
+    }
+
+    /// The CPU learner's ELU and the GPU learner's give the same values and, away from 0,
+    /// the same gradients (SELU's constants included).
+    #[test]
+    fn elu_forms_agree() {
+        let device = Device::flex().autodiff();
+        let inputs: Vec<f32> = (-40..=40).map(|i| i as f32 * 0.37 + 0.011).collect();
+        for (scale, alpha) in [(1.0, 1.0), (SELU_SCALE, SELU_SCALE * SELU_ALPHA)] {
+            let run = |form: fn(Tensor<2>, f64, f64) -> Tensor<2>| {
+                let x = Tensor::<2>::from_data(
+                    TensorData::new(inputs.clone(), [1, inputs.len()]),
+                    &device,
+                )
+                .require_grad();
+                let y = form(x.clone(), scale, alpha);
+                let values: Vec<f32> = y.clone().into_data().try_into_vec().unwrap();
+                let grads = y.sum().backward();
+                let g: Vec<f32> = x.grad(&grads).unwrap().into_data().try_into_vec().unwrap();
+                (values, g)
+            };
+            let (mask, clamps) = (run(elu_by_mask), run(elu_by_clamps));
+            assert_eq!(mask.0, clamps.0, "values");
+            assert!(max_abs_diff(&mask.1, &clamps.1) <= 1e-7, "gradients");
+        }
     }
 
     /// Chunk counts: powers of two, at most 256, chunks of at least 1 024 rows.
