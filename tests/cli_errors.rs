@@ -142,16 +142,27 @@ fn override_errors_name_the_override_and_minibatches_are_checked_first() {
     let _ = std::fs::remove_dir_all(&root);
 }
 
-/// The examples' binaries (which `cargo test` builds beside the tests) print an error as its
-/// message on one line, not as a debug struct, and exit with failure.
-#[test]
-fn examples_print_error_messages_not_debug_structs() {
-    let examples = std::env::current_exe()
+/// The binary of an example, which `cargo test --workspace` builds beside the tests.
+fn example_binary(name: &str) -> std::path::PathBuf {
+    let binary = std::env::current_exe()
         .unwrap()
         .parent()
         .and_then(Path::parent)
         .unwrap()
-        .join("examples");
+        .join("examples")
+        .join(name);
+    assert!(
+        binary.exists(),
+        "{} is missing: run the tests with `cargo test --workspace`, which builds the examples",
+        binary.display()
+    );
+    binary
+}
+
+/// The examples' binaries (which `cargo test` builds beside the tests) print an error as its
+/// message on one line, not as a debug struct, and exit with failure.
+#[test]
+fn examples_print_error_messages_not_debug_structs() {
     for (example, args, expected) in [
         ("zero_agent", &["--task", "Foo-v0"][..], "no task `Foo-v0`"),
         (
@@ -165,13 +176,7 @@ fn examples_print_error_messages_not_debug_structs() {
             "unknown physics backend `nope`",
         ),
     ] {
-        let binary = examples.join(example);
-        assert!(
-            binary.exists(),
-            "{} is missing: run the tests with `cargo test --workspace`, which builds the examples",
-            binary.display()
-        );
-        let out = std::process::Command::new(&binary)
+        let out = std::process::Command::new(example_binary(example))
             .args(args)
             .output()
             .unwrap();
@@ -206,4 +211,44 @@ fn envs_beyond_the_memory_fail_fast() {
         message.contains("100000000 envs on the `rapier` backend need at least"),
         "{message}"
     );
+}
+
+/// Warnings show without `RUST_LOG` (here `play` skipping a newer run without a checkpoint),
+/// and `list_tasks` says which tasks train and with which algorithm.
+#[test]
+fn examples_show_warnings_and_list_the_training_algorithm() {
+    let root = std::env::temp_dir().join(format!("orbit-warnings-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let experiment = root.join("franka_reach");
+    std::fs::create_dir_all(experiment.join("2026-01-01_00-00-00")).unwrap();
+    std::fs::write(experiment.join("2026-01-01_00-00-00/model_0.json"), "{}").unwrap();
+    std::fs::create_dir_all(experiment.join("2026-01-02_00-00-00/params")).unwrap();
+    let out = std::process::Command::new(example_binary("play"))
+        .args([
+            "--task",
+            "Reach-Franka-v0",
+            "--log-root",
+            root.to_str().unwrap(),
+        ])
+        .env_remove("RUST_LOG")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("WARN") && stderr.contains("skipped newer run directories"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&root).unwrap();
+
+    let out = std::process::Command::new(example_binary("list_tasks"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let training = |id: &str| {
+        let line = stdout.lines().find(|l| l.starts_with(id)).unwrap();
+        line.split_whitespace().nth(1).unwrap().to_string()
+    };
+    assert_eq!(training("BoxPushing-JointPos-Franka-v0 "), "PPO");
+    assert_eq!(training("BoxPushing-ProMP-Franka-v0 "), "BBRL-PPO");
+    assert_eq!(training("BoxPushing-Torque-TemporalSparse-Franka-v0 "), "-");
 }
