@@ -12,5 +12,5 @@ use clap::Parser;
 
 fn main() -> std::process::ExitCode {
     orbit::init_logging();
-    orbit::exit_code(orbit::train::play(&orbit::train::PlayArgs::parse()))
+    orbit::exit_code(orbit::play::play(&orbit::play::PlayArgs::parse()))
 }

@@ -17,7 +17,7 @@ use clap::Parser;
 fn main() -> std::process::ExitCode {
     orbit::init_logging();
     let args = orbit::train::TrainArgs::parse();
-    let run = orbit::train::stop_on_signals()
+    let run = orbit::signals::stop_on_signals()
         .map_err(Into::into)
         .and_then(|stop| orbit::train::train_with(&args, true, Some(stop)));
     orbit::exit_code(run)

@@ -155,6 +155,8 @@ pub fn run_overrides(
 
 pub mod agent;
 pub mod learner;
+pub mod play;
+pub mod signals;
 pub mod train;
 
 #[cfg(test)]

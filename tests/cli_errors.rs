@@ -4,7 +4,8 @@ use std::path::Path;
 
 use clap::Parser;
 use orbit::agent::{AgentArgs, run};
-use orbit::train::{PlayArgs, TrainArgs, play, train};
+use orbit::play::{PlayArgs, play};
+use orbit::train::{TrainArgs, train};
 
 /// The error message of `train` on the reach task with 4 envs, logging under `root`, with
 /// `extra` tokens.

@@ -6,7 +6,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use clap::Parser;
-use orbit::train::{TrainArgs, stop_on_signals, train, train_with};
+use orbit::signals::stop_on_signals;
+use orbit::train::{TrainArgs, train, train_with};
 
 /// The environment variable that makes [`train_until_signalled`] train (its log root).
 const CHILD_LOG_ROOT: &str = "ORBIT_TEST_TRAIN_CHILD_LOG_ROOT";

@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use clap::Parser;
-use orbit::train::{PlayArgs, TrainArgs, play, train};
+use orbit::play::{PlayArgs, play};
+use orbit::train::{TrainArgs, train};
 
 /// Frames and per-frame delay (hundredths of a second) of a GIF.
 fn gif_frames(path: &Path) -> Vec<u16> {

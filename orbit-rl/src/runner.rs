@@ -380,7 +380,9 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             (Some(dir), it) if it > 0 => {
                 let base = dir.join(format!("model_{}", it - 1));
                 if !base.with_extension("json").exists() {
-                    tracing::warn!("stopping: saving a checkpoint (a second signal aborts)");
+                    tracing::warn!(
+                        "stopping: saving a checkpoint (a signal more than a second later aborts)"
+                    );
                     self.save_checkpoint()?;
                 }
                 Some(base)
