@@ -42,10 +42,9 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
         None,
         None,
     )?;
-    let backend = crate::choose_run_backend(&configs.env, &overrides)?;
-    overrides.push(format!("sim.backend={:?}", backend.name));
-    let (mut env, name) =
-        crate::make_env(args.task.as_deref(), e.task_config.as_deref(), &overrides)?;
+    crate::choose_run_backend(&configs.env, &mut overrides)?;
+    let mut env = crate::managers::make_from_file(&configs.env, &overrides)?;
+    let name = configs.name;
     env.reset()?;
     let (n, d) = (env.num_envs(), env.action_dim());
     let mut rng = EnvRng::new(e.seed.unwrap_or(0), 0, streams::POLICY);

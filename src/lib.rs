@@ -110,12 +110,13 @@ pub fn env_override(text: &str) -> String {
     text.strip_prefix("env.").unwrap_or(text).to_string()
 }
 
-/// The physics backend that the env config `env` with `overrides` runs on here: its
+/// Chooses the physics backend that the env config `env` with `overrides` runs on here (its
 /// `sim.backend`, or for `"auto"` the backend chosen for this machine, which is then said on
-/// standard output with the reason (and how to get a faster device when one is missing).
+/// standard output with the reason and how to get a faster device when one is missing) and
+/// appends the override that pins it, so the env and its `params/` use that backend.
 pub fn choose_run_backend(
     env: &std::path::Path,
-    overrides: &[String],
+    overrides: &mut Vec<String>,
 ) -> Result<core::physics::BackendChoice, managers::EnvError> {
     let doc = managers::load_env_config(env, overrides)?;
     let name: String = match core::config::node_at(&doc, "sim.backend") {
@@ -129,6 +130,7 @@ pub fn choose_run_backend(
             choice.name
         );
     }
+    overrides.extend(run_overrides(None, None, Some(&choice.name), &[]));
     Ok(choice)
 }
 

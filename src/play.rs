@@ -129,8 +129,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let e = &args.env;
     let mut env_overrides =
         crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &overrides.env);
-    let backend = crate::choose_run_backend(&configs.env, &env_overrides)?;
-    env_overrides.push(format!("sim.backend={:?}", backend.name));
+    crate::choose_run_backend(&configs.env, &mut env_overrides)?;
     let video = args.video.video.then(|| {
         let run_dir = base.parent().unwrap_or(Path::new("."));
         VideoCfg {

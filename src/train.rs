@@ -132,10 +132,8 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     } = split_overrides(&args.overrides);
     // The backend is fixed before the agent config is chosen: physics on the CPU trains with
     // the task's config sized for CPUs, if it has one.
-    let backend = crate::choose_run_backend(
-        &configs.env,
-        &crate::run_overrides(None, None, args.env.backend.as_deref(), &user_env),
-    )?;
+    let mut probe = crate::run_overrides(None, None, args.env.backend.as_deref(), &user_env);
+    let backend = crate::choose_run_backend(&configs.env, &mut probe)?;
     if backend.probe.kind.is_cpu()
         && let Some(cpu_agent) = configs.cpu_agent.take()
     {
