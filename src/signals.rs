@@ -4,16 +4,14 @@
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use orbit_rl::RlError;
-
 /// Signals within this time of the first one count as the same request: a wrapper such as
 /// `timeout` sends its signal to the command and again to its process group.
 const SIGNAL_GRACE: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// A flag that the first SIGINT (Ctrl-C) or SIGTERM sets; a later one (more than a second
-/// after it) ends the process at once with exit code 130. Pass it to [`train_with`](crate::train::train_with) to stop
-/// training with a checkpoint.
-pub fn stop_on_signals() -> Result<Arc<AtomicBool>, RlError> {
+/// after it) ends the process at once with exit code 130. Pass it to
+/// [`train_with`](crate::train::train_with) to stop training with a checkpoint.
+pub fn stop_on_signals() -> std::io::Result<Arc<AtomicBool>> {
     let stop = Arc::new(AtomicBool::new(false));
     // Nanoseconds after `origin` of the first signal (0: none yet).
     let first = Arc::new(std::sync::atomic::AtomicU64::new(0));
@@ -28,8 +26,7 @@ pub fn stop_on_signals() -> Result<Arc<AtomicBool>, RlError> {
         };
         // SAFETY: the handler only reads the monotonic clock (clock_gettime), uses atomics and
         // calls `_exit`, all async-signal-safe; it allocates and locks nothing.
-        unsafe { signal_hook::low_level::register(signal, handler) }
-            .map_err(|e| RlError::Device(format!("installing a signal handler: {e}")))?;
+        unsafe { signal_hook::low_level::register(signal, handler) }?;
     }
     Ok(stop)
 }
