@@ -22,17 +22,7 @@ pub struct Progress {
 impl Progress {
     /// Progress over `iterations` iterations, the first of which is `first` (a resumed run's).
     pub fn new(first: usize, iterations: usize) -> Self {
-        Self::with_outputs(
-            first,
-            iterations,
-            std::io::stderr().is_terminal(),
-            !std::io::stdout().is_terminal(),
-        )
-    }
-
-    /// Progress with the bar and the lines chosen by the caller.
-    pub fn with_outputs(first: usize, iterations: usize, bar: bool, lines: bool) -> Self {
-        let bar = bar.then(|| {
+        let bar = std::io::stderr().is_terminal().then(|| {
             let bar = ProgressBar::new(iterations as u64);
             bar.set_style(
                 ProgressStyle::with_template(
@@ -46,7 +36,7 @@ impl Progress {
         });
         Self {
             bar,
-            lines,
+            lines: !std::io::stdout().is_terminal(),
             start: Instant::now(),
             first: first as u64,
             total: iterations as u64,

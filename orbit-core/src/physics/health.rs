@@ -53,21 +53,16 @@ pub fn check_state(backend: &dyn PhysicsBackend) -> Option<Instability> {
     let num_envs = backend.num_envs();
     for (a, art) in layout.articulations.iter().enumerate() {
         let view = backend.articulation(a);
-        let dofs = art.joint_names.len();
         for (values, what, limit) in [
             (view.joint_pos, "joint position", MAX_JOINT_POSITION),
             (view.joint_vel, "joint velocity", MAX_JOINT_VELOCITY),
         ] {
-            if let Some(i) = crate::parallel::first_beyond(values, limit) {
-                let joint = &art.joint_names[i % dofs];
-                return Some(Instability {
-                    quantity: format!("{what} of joint `{joint}` of articulation `{}`", art.name),
-                    env: i / dofs,
-                    value: values[i],
-                    limit,
-                    envs_affected: rows_beyond(values, dofs, limit),
-                    num_envs,
-                });
+            let found = scan(values, art.joint_names.len(), limit, num_envs, |column| {
+                let joint = &art.joint_names[column];
+                format!("{what} of joint `{joint}` of articulation `{}`", art.name)
+            });
+            if found.is_some() {
+                return found;
             }
         }
     }
@@ -83,26 +78,37 @@ pub fn check_state(backend: &dyn PhysicsBackend) -> Option<Instability> {
             ),
         ] {
             let flat: &[f32] = bytemuck::cast_slice::<Vec3, f32>(values);
-            if let Some(i) = crate::parallel::first_beyond(flat, limit) {
-                let axis = ["x", "y", "z"][i % 3];
-                return Some(Instability {
-                    quantity: format!("{what} ({axis}) of object `{name}`"),
-                    env: i / 3,
-                    value: flat[i],
-                    limit,
-                    envs_affected: rows_beyond(flat, 3, limit),
-                    num_envs,
-                });
+            let found = scan(flat, 3, limit, num_envs, |column| {
+                format!("{what} ({}) of object `{name}`", ["x", "y", "z"][column])
+            });
+            if found.is_some() {
+                return found;
             }
         }
     }
     None
 }
 
-/// Rows of `dim` values holding a value beyond `limit` (or NaN).
-fn rows_beyond(values: &[f32], dim: usize, limit: f32) -> usize {
-    values
+/// The first value of `values` (`num_envs` rows of `dim`) beyond `limit`, as an
+/// [`Instability`] whose quantity `describe` names from the value's column.
+fn scan(
+    values: &[f32],
+    dim: usize,
+    limit: f32,
+    num_envs: usize,
+    describe: impl FnOnce(usize) -> String,
+) -> Option<Instability> {
+    let i = crate::parallel::first_beyond(values, limit)?;
+    let envs_affected = values
         .chunks(dim)
         .filter(|row| crate::parallel::first_beyond(row, limit).is_some())
-        .count()
+        .count();
+    Some(Instability {
+        quantity: describe(i % dim),
+        env: i / dim,
+        value: values[i],
+        limit,
+        envs_affected,
+        num_envs,
+    })
 }
