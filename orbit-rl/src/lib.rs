@@ -13,6 +13,7 @@
 pub mod adam;
 pub mod cfg;
 pub mod checkpoint;
+pub mod collective;
 mod error;
 pub mod logger;
 pub mod model;
@@ -27,6 +28,7 @@ pub mod tensorboard;
 
 pub use burn;
 pub use cfg::{LearnerDevice, RunnerCfg};
+pub use collective::Collective;
 pub use error::RlError;
 pub use orbit_envs::{VecEnv, VecEnvStep};
 pub use runner::{IterationLog, OnPolicyRunner, Policy};

@@ -3,6 +3,8 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::collective::Collective;
+
 /// Rows per block of the parallel passes. Fixed (not derived from the number of threads), so
 /// that the statistics' summation order, and with it every bit of the result, is too.
 const ROW_BLOCK: usize = 2048;
@@ -46,24 +48,77 @@ impl EmpiricalNormalizer {
     /// added in block order, so the result depends on neither the number of threads nor
     /// their timing.
     pub fn update(&mut self, x: &[f32]) {
-        let d = self.dim();
-        let n = x.len() / d;
-        if n == 0 || self.count >= self.until {
+        if !self.frozen() {
+            let batch = self.batch_stats(x);
+            self.fold(&batch);
+        }
+    }
+
+    /// [`update`](Self::update) with every rank's batch: each rank's batch statistics are
+    /// gathered and folded in rank order, so every rank holds the same statistics.
+    pub fn update_across(&mut self, c: &dyn Collective, x: &[f32]) {
+        // Frozen on one rank is frozen on all: they hold the same count.
+        if self.frozen() {
             return;
         }
-        self.count += n as u64;
-        let rate = n as f64 / self.count as f64;
-        let batch_mean: Vec<f64> = column_sums(x, d, None)
+        let batch = self.batch_stats(x);
+        let mut flat = Vec::with_capacity(1 + 2 * self.dim());
+        flat.push(batch.rows as f64);
+        flat.extend(&batch.mean);
+        flat.extend(&batch.var);
+        let d = self.dim();
+        for rank in crate::collective::gather_f64(c, &flat) {
+            self.fold(&BatchStats {
+                rows: rank[0] as u64,
+                mean: rank[1..1 + d].to_vec(),
+                var: rank[1 + d..].to_vec(),
+            });
+        }
+    }
+
+    /// Whether the statistics have stopped changing.
+    fn frozen(&self) -> bool {
+        self.count >= self.until
+    }
+
+    /// The mean and biased variance of a batch of rows.
+    fn batch_stats(&self, x: &[f32]) -> BatchStats {
+        let d = self.dim();
+        let n = x.len() / d;
+        if n == 0 {
+            return BatchStats {
+                rows: 0,
+                mean: vec![0.0; d],
+                var: vec![0.0; d],
+            };
+        }
+        let mean: Vec<f64> = column_sums(x, d, None)
             .into_iter()
             .map(|s| s / n as f64)
             .collect();
-        let squares = column_sums(x, d, Some(&batch_mean));
-        for j in 0..d {
-            let batch_var = squares[j] / n as f64;
+        let var = column_sums(x, d, Some(&mean))
+            .into_iter()
+            .map(|s| s / n as f64)
+            .collect();
+        BatchStats {
+            rows: n as u64,
+            mean,
+            var,
+        }
+    }
+
+    /// Folds a batch's statistics into the running ones (the exact pooled mean and variance).
+    fn fold(&mut self, batch: &BatchStats) {
+        if batch.rows == 0 || self.frozen() {
+            return;
+        }
+        self.count += batch.rows;
+        let rate = batch.rows as f64 / self.count as f64;
+        for j in 0..self.dim() {
             let (mean, var) = (f64::from(self.mean[j]), f64::from(self.var[j]));
-            let delta = batch_mean[j] - mean;
+            let delta = batch.mean[j] - mean;
             let new_mean = mean + rate * delta;
-            let new_var = var + rate * (batch_var - var + delta * (batch_mean[j] - new_mean));
+            let new_var = var + rate * (batch.var[j] - var + delta * (batch.mean[j] - new_mean));
             self.mean[j] = new_mean as f32;
             self.var[j] = new_var as f32;
         }
@@ -129,6 +184,13 @@ impl EmpiricalNormalizer {
                 }
             });
     }
+}
+
+/// The rows, mean and biased variance per column of one batch.
+struct BatchStats {
+    rows: u64,
+    mean: Vec<f64>,
+    var: Vec<f64>,
 }
 
 /// Per-column sums over the rows of `x` (`d` columns) of the values, or with `center` of their

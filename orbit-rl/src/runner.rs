@@ -10,6 +10,7 @@ use std::time::Instant;
 use crate::RlError;
 use crate::cfg::RunnerCfg;
 pub use crate::checkpoint::{CheckpointState, read_state};
+use crate::collective::{self, Collective};
 use crate::logger::ScalarLog;
 use crate::model::ActorCritic;
 use crate::normalizer::EmpiricalNormalizer;
@@ -102,6 +103,8 @@ pub struct OnPolicyRunner<E: VecEnv> {
     /// [`RlError::Interrupted`].
     pub stop: Option<Arc<AtomicBool>>,
     device: Device,
+    /// The other ranks of a data-parallel run (see [`distribute`](Self::distribute)).
+    collective: Option<Arc<dyn Collective>>,
 }
 
 impl<E: VecEnv> OnPolicyRunner<E> {
@@ -167,7 +170,19 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             show_progress: false,
             stop: None,
             device,
+            collective: None,
         })
+    }
+
+    /// Makes this runner one rank of a data-parallel run (RSL-RL's multi-GPU training): the
+    /// learner takes rank 0's parameters and averages its gradients with the other ranks
+    /// (see [`Ppo::distribute`]), the observation statistics pool every rank's observations,
+    /// and a stop request on any rank stops all. Call it on every rank, after loading a
+    /// checkpoint to resume. Each rank steps its own envs (seed them apart); only the rank
+    /// given a log directory writes logs and checkpoints. Logged env steps count every rank's.
+    pub fn distribute(&mut self, c: Arc<dyn Collective>) {
+        self.alg.distribute(c.clone());
+        self.collective = Some(c);
     }
 
     /// The run directory, if logging to files.
@@ -198,8 +213,10 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         for (norm, x, out) in std::iter::once(actor).chain(critic) {
             match norm {
                 Some(n) => {
-                    if update {
-                        n.update(x);
+                    match (update, self.collective.as_deref()) {
+                        (false, _) => {}
+                        (true, Some(c)) => n.update_across(c, x),
+                        (true, None) => n.update(x),
                     }
                     n.normalize_into(x, out);
                 }
@@ -222,8 +239,13 @@ impl<E: VecEnv> OnPolicyRunner<E> {
     /// Runs `num_iterations` iterations (continuing the numbering of a resumed run), saving a
     /// checkpoint every `save_interval` iterations and after the last.
     pub fn learn(&mut self, num_iterations: usize) -> Result<(), RlError> {
+        let (rank, ranks) = self
+            .collective
+            .as_deref()
+            .map_or((0, 1), |c| (c.rank(), c.world_size()));
         if self.iteration == 0 && self.cfg.init_at_random_ep_len {
-            self.env.randomize_episode_lengths(self.cfg.seed)?;
+            self.env
+                .randomize_episode_lengths(self.cfg.seed + rank as u64)?;
         }
         let (n, na) = (self.env.num_envs(), self.env.num_actions());
         let t_steps = self.cfg.num_steps_per_env;
@@ -264,7 +286,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 let env_start = Instant::now();
                 let step = self.env.step(&actions)?;
                 env_time += env_start.elapsed().as_secs_f64();
-                interactions += n as u64 * u64::from(step.interactions);
+                interactions += (n * ranks) as u64 * u64::from(step.interactions);
                 self.alg
                     .process_env_step(step.rewards, step.dones, step.time_outs);
                 for (key, &v) in step.log {
@@ -364,11 +386,16 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         Ok(())
     }
 
-    /// Whether [`stop`](Self::stop) was set.
+    /// Whether [`stop`](Self::stop) was set (on any rank of a data-parallel run).
     fn stop_requested(&self) -> bool {
-        self.stop
+        let local = self
+            .stop
             .as_ref()
-            .is_some_and(|s| s.load(Ordering::Relaxed))
+            .is_some_and(|s| s.load(Ordering::Relaxed));
+        match self.collective.as_deref() {
+            Some(c) => collective::any(c, local),
+            None => local,
+        }
     }
 
     /// Saves the last finished iteration's checkpoint, unless it was saved already or no

@@ -10,9 +10,10 @@
 //! and returns (`returns`), the minibatch permutation drawn on a helper thread (`shuffle`),
 //! the rollout on the device and its minibatches (`minibatch`), the update with its losses and
 //! KL-adaptive learning rate (`update`), gradient-norm clipping (`grad_clip`), checkpoints
-//! (`checkpoint`) and the tensor helpers they share (`tensor`).
+//! (`checkpoint`), the replica of a data-parallel run (`distributed`) and the tensor helpers they share (`tensor`).
 
 mod checkpoint;
+mod distributed;
 #[cfg(test)]
 mod fixtures;
 mod grad_clip;
@@ -23,11 +24,14 @@ mod shuffle;
 mod tensor;
 mod update;
 
+use std::sync::Arc;
+
 use burn::tensor::Device;
 use orbit_core::rng::EnvRng;
 
 use crate::adam::Adam;
 use crate::cfg::PpoCfg;
+use crate::collective::Collective;
 use crate::model::ActorCritic;
 use crate::normalizer::EmpiricalNormalizer;
 use crate::storage::RolloutStorage;
@@ -69,6 +73,8 @@ pub struct Ppo {
     updates: u32,
     /// The next update's shuffle, drawn on a helper thread while the rollout is collected.
     next_shuffle: Option<PendingShuffle>,
+    /// The other replicas of a data-parallel run (see [`Ppo::distribute`]).
+    collective: Option<Arc<dyn Collective>>,
 }
 
 /// The largest rollout (envs × steps) an update takes: its rows are indexed by `i32` on the
@@ -108,6 +114,7 @@ impl Ppo {
             sigma: Vec::new(),
             updates: 0,
             next_shuffle: None,
+            collective: None,
         }
     }
 

@@ -38,12 +38,21 @@ impl Ppo {
         }
         let (gamma, lam) = (self.cfg.gamma, self.cfg.lam);
         let per_mb = self.cfg.normalize_advantage_per_mini_batch;
-        self.storage.compute_returns(&last, gamma, lam, per_mb);
+        let collective = self.collective.as_deref();
+        // Replicas normalise the advantages over every rank's rollout.
+        self.storage
+            .compute_returns(&last, gamma, lam, per_mb || collective.is_some());
+        if let (Some(c), false) = (collective, per_mb) {
+            crate::collective::normalize_across(c, &mut self.storage.advantages);
+        }
         // The critic trains on normalised targets: fold this rollout's returns into the
         // statistics, then express the returns and the old values (for value clipping) in
         // them.
         if let Some(normalizer) = &mut self.value_normalizer {
-            normalizer.update(&self.storage.returns);
+            match collective {
+                Some(c) => normalizer.update_across(c, &self.storage.returns),
+                None => normalizer.update(&self.storage.returns),
+            }
             normalizer.normalize(&mut self.storage.returns);
             normalizer.normalize(&mut self.storage.values);
         }

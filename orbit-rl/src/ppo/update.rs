@@ -207,9 +207,13 @@ impl Ppo {
             vec![l.value.detach(), l.surrogate.detach(), l.entropy.detach()],
             0,
         );
+        let kl = match self.collective.as_deref() {
+            Some(c) => super::distributed::average_gradients(c, &self.model, &mut grads, l.kl),
+            None => l.kl,
+        };
         if cfg.schedule == Schedule::Adaptive {
             // A NaN KL leaves the rate as it is; the update then fails on its losses.
-            self.optimizer.adapt(l.kl, cfg.desired_kl);
+            self.optimizer.adapt(kl, cfg.desired_kl);
         }
         clip_gradients(&self.model, &mut grads, cfg.grad_clip, cfg.max_grad_norm);
         let model = self.model.clone();
