@@ -57,6 +57,21 @@ impl Gpu {
 
 static GPU: OnceLock<Result<Arc<Gpu>, String>> = OnceLock::new();
 
+/// The GPU adapter chosen by [`select_gpu`].
+static GPU_INDEX: OnceLock<usize> = OnceLock::new();
+
+/// Makes the process's GPU the `index`-th GPU adapter in Vulkan's order (data-parallel
+/// training puts each rank of a host on its own GPU). Without a GPU adapter every process uses
+/// the CPU driver. Call it before the GPU is first used.
+pub fn select_gpu(index: usize) -> Result<(), String> {
+    if GPU.get().is_some() {
+        return Err("the GPU is chosen before its first use".into());
+    }
+    GPU_INDEX
+        .set(index)
+        .map_err(|_| "the GPU can be chosen once per process".to_string())
+}
+
 /// The process's GPU, created on first use; an error says why none is available.
 pub fn gpu() -> Result<Arc<Gpu>, String> {
     GPU.get_or_init(|| pollster::block_on(create()).map(Arc::new))
@@ -67,6 +82,21 @@ async fn create() -> Result<Gpu, String> {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = wgpu::Backends::VULKAN;
     let instance = wgpu::Instance::new(desc);
+    if let Some(&index) = GPU_INDEX.get() {
+        let gpus: Vec<wgpu::Adapter> = (instance.enumerate_adapters(wgpu::Backends::VULKAN).await)
+            .into_iter()
+            .filter(|a| a.get_info().device_type != wgpu::DeviceType::Cpu)
+            .collect();
+        if !gpus.is_empty() {
+            let count = gpus.len();
+            let adapter = gpus.into_iter().nth(index).ok_or_else(|| {
+                format!(
+                    "GPU {index} was asked for, and this host has {count} GPU adapters: start at                      most {count} ranks per host"
+                )
+            })?;
+            return open(instance, adapter).await;
+        }
+    }
     let adapter = instance
         .request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
@@ -82,6 +112,11 @@ async fn create() -> Result<Gpu, String> {
                  libvulkan1`), a GPU needs its vendor's driver and `libvulkan1`"
             )
         })?;
+    open(instance, adapter).await
+}
+
+/// A device on `adapter` with every stable feature and limit it has.
+async fn open(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<Gpu, String> {
     let info = adapter.get_info();
     let limits = adapter.limits();
     let (device, queue) = adapter
