@@ -156,6 +156,7 @@ pub fn run_overrides(
 }
 
 pub mod agent;
+pub mod distributed;
 pub mod learner;
 pub mod play;
 pub mod signals;

@@ -67,6 +67,12 @@ pub struct TrainArgs {
     /// Root of the run directories.
     #[arg(long, default_value = "logs")]
     pub log_root: PathBuf,
+    /// Train data-parallel as one rank of an MPI job, one process per GPU (Isaac Lab's
+    /// `--distributed`): `mpiexec -n <GPUs> train --distributed …`. Each rank steps its own
+    /// `num_envs` envs seeded `seed + rank` on its host's GPU `local rank`; only rank 0 logs
+    /// and checkpoints. Needs a build with `--features distributed`.
+    #[arg(long)]
+    pub distributed: bool,
     /// Config overrides: `env.<path>=<value>` for the env, `agent.<path>=<value>` for the runner,
     /// `bb.<path>=<value>` for a black-box task's wrapper (e.g. `env.episode_length_s=4.0
     /// agent.algorithm.learning_rate=3e-4 bb.trajectory[0].weights_scale=0.5`).
@@ -279,7 +285,48 @@ pub fn train_with(
     show_progress: bool,
     stop: Option<Arc<AtomicBool>>,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
-    let run = resolve(args)?;
+    if !args.distributed {
+        return train_rank(args, show_progress, stop, None);
+    }
+    // Before the GPU is first used: it picks this rank's.
+    let rank = crate::distributed::Rank::join()?;
+    if rank.rank == 0 {
+        println!(
+            "data-parallel training: {} ranks on {} host(s) (MPI); rank 0 logs and checkpoints",
+            rank.world_size, rank.hosts
+        );
+    }
+    let result = train_rank(args, show_progress && rank.rank == 0, stop, Some(&rank));
+    match &result {
+        Err(e) if rank.world_size > 1 && !is_interrupted(e.as_ref()) => {
+            eprintln!("error on rank {}: {e}", rank.rank);
+            rank.abort(crate::failure_status(e.as_ref()))
+        }
+        _ => result,
+    }
+}
+
+/// Whether `e` is a stop request's end (every rank stops together).
+fn is_interrupted(e: &(dyn std::error::Error + 'static)) -> bool {
+    matches!(
+        e.downcast_ref::<RlError>(),
+        Some(RlError::Interrupted { .. })
+    )
+}
+
+/// [`train_with`] as one rank of a data-parallel run (`rank`), or alone.
+fn train_rank(
+    args: &TrainArgs,
+    show_progress: bool,
+    stop: Option<Arc<AtomicBool>>,
+    rank: Option<&crate::distributed::Rank>,
+) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
+    let mut run = resolve(args)?;
+    if let Some(r) = rank {
+        // Each rank's envs differ (Isaac Lab seeds them by rank); the learner's seed is shared.
+        run.env_overrides
+            .push(format!("seed={}", run.agent.seed + r.rank as u64));
+    }
     let cfg = run.agent.clone();
     let resume_from = if args.resume {
         Some(find_checkpoint(
@@ -295,13 +342,20 @@ pub fn train_with(
         let n: usize = orbit_core::config::from_node(n)?;
         cfg.validate_batch(n, &agent_file(&run.configs)?.display().to_string())?;
     }
+    if rank.is_some_and(|r| r.rank > 0) {
+        let mut runner = start_runner(args, &run, &env_doc, None, resume_from.as_deref(), false)?;
+        runner.stop = stop;
+        runner.distribute(rank.expect("a rank").collective.clone());
+        runner.learn(cfg.max_iterations)?;
+        return Ok(runner);
+    }
     // Only once the configs and the checkpoint to resume are known to be good.
     let dir = create_run_dir(&args.log_root, &cfg.experiment_name, &cfg.run_name)?;
     let mut runner = match start_runner(
         args,
         &run,
         &env_doc,
-        &dir,
+        Some(&dir),
         resume_from.as_deref(),
         show_progress,
     ) {
@@ -315,6 +369,9 @@ pub fn train_with(
     };
     runner.show_progress = show_progress;
     runner.stop = stop;
+    if let Some(r) = rank {
+        runner.distribute(r.collective.clone());
+    }
     runner.learn(cfg.max_iterations)?;
     if let Some(dir) = runner.log_dir() {
         // A resumed run's curves continue those of the run it resumed from.
@@ -327,18 +384,20 @@ pub fn train_with(
     Ok(runner)
 }
 
-/// Writes the run's `params/`, builds its env and a runner logging into `dir`, and loads the
-/// checkpoint to resume from.
+/// Writes the run's `params/`, builds its env and a runner logging into `dir` (none: a rank
+/// of a data-parallel run that does not log), and loads the checkpoint to resume from.
 fn start_runner(
     args: &TrainArgs,
     run: &ResolvedRun,
     env_doc: &Node,
-    dir: &Path,
+    dir: Option<&Path>,
     resume_from: Option<&Path>,
     show_progress: bool,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
-    write_params(dir, run, env_doc)?;
-    let video = args.video.video.then(|| VideoCfg {
+    if let Some(dir) = dir {
+        write_params(dir, run, env_doc)?;
+    }
+    let video = dir.filter(|_| args.video.video).map(|dir| VideoCfg {
         dir: dir.join("videos").join("train"),
         length: args.video.video_length,
         interval: Some(args.video_interval),
@@ -354,20 +413,24 @@ fn start_runner(
         video,
     )?;
     let cfg = run.agent.clone();
-    println!(
-        "{}: {} envs × {} steps per iteration, {} iterations (env built in {:.1} s); run \
-         directory {}",
-        run.configs.name,
-        vec_env.num_envs(),
-        cfg.num_steps_per_env,
-        cfg.max_iterations,
-        build_start.elapsed().as_secs_f64(),
-        dir.display()
-    );
+    if let Some(dir) = dir {
+        println!(
+            "{}: {} envs × {} steps per iteration, {} iterations (env built in {:.1} s); run \
+             directory {}",
+            run.configs.name,
+            vec_env.num_envs(),
+            cfg.num_steps_per_env,
+            cfg.max_iterations,
+            build_start.elapsed().as_secs_f64(),
+            dir.display()
+        );
+    }
     let device = crate::learner::learner_device(cfg.device)?;
-    let mut runner = OnPolicyRunner::new(vec_env, cfg, Some(dir.to_path_buf()), device)?;
+    let mut runner = OnPolicyRunner::new(vec_env, cfg, dir.map(Path::to_path_buf), device)?;
     if let Some(base) = resume_from {
-        println!("resuming from {}", base.display());
+        if dir.is_some() {
+            println!("resuming from {}", base.display());
+        }
         runner.load_checkpoint(base)?;
     }
     Ok(runner)

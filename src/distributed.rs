@@ -1,0 +1,76 @@
+//! `train --distributed`: this process as one rank of an MPI job (one process per GPU, as
+//! Isaac Lab's `torchrun … --distributed`), in builds with the `distributed` feature.
+
+use std::sync::Arc;
+
+use orbit_rl::{Collective, RlError};
+
+/// This process's place in a data-parallel run.
+pub struct Rank {
+    /// The rank group the learner exchanges through.
+    pub collective: Arc<dyn Collective>,
+    /// Rank among all processes.
+    pub rank: usize,
+    /// Number of ranks.
+    pub world_size: usize,
+    /// Rank among the processes on this host (it picks the host's GPU).
+    pub local_rank: usize,
+    /// Number of hosts.
+    pub hosts: usize,
+    #[cfg(feature = "distributed")]
+    mpi: Arc<orbit_distributed::Mpi>,
+}
+
+impl Rank {
+    /// Joins the MPI job this process was started in (`mpiexec -n N …`; without a launcher, a
+    /// job of one) and puts this rank on its host's GPU number `local_rank`.
+    #[cfg(feature = "distributed")]
+    pub fn join() -> Result<Self, RlError> {
+        let mpi =
+            Arc::new(orbit_distributed::Mpi::init().map_err(|e| RlError::Device(e.to_string()))?);
+        orbit_physics_wgpu::select_gpu(mpi.local_rank()).map_err(RlError::Device)?;
+        share_cores(mpi.local_size());
+        Ok(Self {
+            collective: mpi.clone(),
+            rank: mpi.rank(),
+            world_size: mpi.world_size(),
+            local_rank: mpi.local_rank(),
+            hosts: mpi.hosts(),
+            mpi,
+        })
+    }
+
+    /// Without the `distributed` feature: an error that says how to build it.
+    #[cfg(not(feature = "distributed"))]
+    pub fn join() -> Result<Self, RlError> {
+        Err(RlError::Device(
+            "this build has no distributed training: build with `--features distributed` (it \
+             links MPI; Debian: `apt-get install mpich libmpich-dev libclang-dev`) and launch \
+             with `mpiexec -n <GPUs> …/train --distributed`"
+                .into(),
+        ))
+    }
+
+    /// Ends every rank with `status`: a rank that fails alone would leave the others waiting
+    /// for it.
+    pub fn abort(&self, status: u8) -> ! {
+        #[cfg(feature = "distributed")]
+        self.mpi.abort(i32::from(status));
+        #[cfg(not(feature = "distributed"))]
+        std::process::exit(i32::from(status))
+    }
+}
+
+/// Shares the host's cores among its ranks: each rank's rayon pool (the env's managers, the
+/// CPU-side policy work) gets `cores / ranks on this host` threads, unless `RAYON_NUM_THREADS`
+/// sets it. Every rank using every core would oversubscribe them.
+#[cfg(feature = "distributed")]
+fn share_cores(ranks_on_host: usize) {
+    if ranks_on_host > 1 && std::env::var_os("RAYON_NUM_THREADS").is_none() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        // Fails only if the pool was already built; it then keeps its size.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads((cores / ranks_on_host).max(1))
+            .build_global();
+    }
+}
