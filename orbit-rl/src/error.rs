@@ -90,7 +90,13 @@ fn interrupted_message(iterations: usize, checkpoint: Option<&std::path::Path>) 
                 base.display()
             )
         }
-        None => "interrupted before the first iteration finished: nothing to save".to_string(),
+        None if iterations == 0 => {
+            "interrupted before the first iteration finished: nothing to save".to_string()
+        }
+        None => format!(
+            "interrupted after {iterations} iterations; this process writes no checkpoints (in \
+             a data-parallel run, rank 0 saves them)"
+        ),
     }
 }
 
