@@ -253,3 +253,15 @@ fn examples_show_warnings_and_list_the_training_algorithm() {
     assert_eq!(training("BoxPushing-ProMP-Franka-v0 "), "BBRL-PPO");
     assert_eq!(training("BoxPushing-Torque-TemporalSparse-Franka-v0 "), "-");
 }
+
+/// `--distributed` in a build without the `distributed` feature says how to build it, and
+/// makes no run directory.
+#[cfg(not(feature = "distributed"))]
+#[test]
+fn distributed_training_needs_its_feature() {
+    let root = std::env::temp_dir().join(format!("orbit-cli-distributed-{}", std::process::id()));
+    let message = reach_train_error(&root, &["--distributed"]);
+    assert!(message.contains("--features distributed"), "{message}");
+    assert!(message.contains("mpiexec"), "{message}");
+    assert!(!root.exists());
+}
