@@ -51,6 +51,26 @@ impl Rank {
         ))
     }
 
+    /// Fails on every rank unless all ranks resolved the same `settings` (the physics backend,
+    /// the training config): ranks that differ there would exchange mismatched data.
+    pub fn check_same_settings(&self, settings: &str) -> Result<(), RlError> {
+        use std::hash::{Hash, Hasher};
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        settings.hash(&mut hasher);
+        let mine = hasher.finish().to_le_bytes();
+        let differ = orbit_rl::collective::ranks_differing(&*self.collective, &mine);
+        if differ.is_empty() {
+            return Ok(());
+        }
+        Err(RlError::EnvMismatch(format!(
+            "rank {} resolved other settings than ranks {differ:?} (the physics backend or the \
+             training config); ranks must train alike. A rank without a GPU of its own picks \
+             another backend under `sim.backend: \"auto\"`: start at most one rank per GPU of a \
+             host, or pass --backend",
+            self.rank
+        )))
+    }
+
     /// Ends every rank with `status`: a rank that fails alone would leave the others waiting
     /// for it.
     pub fn abort(&self, status: u8) -> ! {

@@ -323,6 +323,15 @@ fn train_rank(
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
     let mut run = resolve(args)?;
     if let Some(r) = rank {
+        let env_settings: Vec<&str> = (run.env_overrides.iter())
+            .filter(|o| !o.starts_with("seed="))
+            .map(String::as_str)
+            .collect();
+        r.check_same_settings(&format!(
+            "{}\n{}",
+            run.agent_doc.to_ron(),
+            env_settings.join("\n")
+        ))?;
         // Each rank's envs differ (Isaac Lab seeds them by rank); the learner's seed is shared.
         run.env_overrides
             .push(format!("seed={}", run.agent.seed + r.rank as u64));

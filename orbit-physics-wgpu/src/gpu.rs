@@ -91,7 +91,8 @@ async fn create() -> Result<Gpu, String> {
             let count = gpus.len();
             let adapter = gpus.into_iter().nth(index).ok_or_else(|| {
                 format!(
-                    "GPU {index} was asked for, and this host has {count} GPU adapters: start at                      most {count} ranks per host"
+                    "GPU {index} was asked for, and this host has {count} GPU adapters: start at \
+                     most {count} ranks per host"
                 )
             })?;
             return open(instance, adapter).await;

@@ -72,6 +72,16 @@ pub(crate) fn any(c: &dyn Collective, flag: bool) -> bool {
     all.iter().any(|&f| f != 0)
 }
 
+/// The ranks whose `value` differs from this rank's (every rank passes a value of the same
+/// length): ranks that must agree on something compare it with this.
+pub fn ranks_differing(c: &dyn Collective, value: &[u8]) -> Vec<usize> {
+    let mut all = vec![0u8; value.len() * c.world_size()];
+    c.all_gather(value, &mut all);
+    (0..c.world_size())
+        .filter(|&rank| all[rank * value.len()..(rank + 1) * value.len()] != *value)
+        .collect()
+}
+
 /// Normalises `x` to mean 0 and unbiased standard deviation 1 over every rank's values, as
 /// [`storage::normalize`](crate::storage::normalize) does over one process's: the mean, then
 /// the squared deviations from it, each summed per rank and then in rank order.
@@ -172,6 +182,24 @@ mod tests {
         for (a, b) in joined.iter().zip(&whole) {
             assert!((a - b).abs() < 1e-6, "{a} vs {b}");
         }
+    }
+
+    /// Each rank learns which ranks hold another value than its own.
+    #[test]
+    fn ranks_name_those_that_differ() {
+        let results: Vec<Vec<usize>> = std::thread::scope(|s| {
+            let handles: Vec<_> = group(3)
+                .into_iter()
+                .map(|rank| {
+                    s.spawn(move || {
+                        let value = if rank.rank() == 2 { b"xy" } else { b"ab" };
+                        ranks_differing(&rank, value)
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(results, vec![vec![2], vec![2], vec![0, 1]]);
     }
 
     /// The mean over ranks is summed in rank order: every rank gets the same value.

@@ -277,7 +277,13 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                     if let Some(p) = &progress {
                         p.finish();
                     }
-                    return Err(self.stop_with_checkpoint()?);
+                    let stopped = self.stop_with_checkpoint()?;
+                    if let Some(c) = self.collective.as_deref() {
+                        // No rank ends (and lets the launcher end the job) before rank 0 has
+                        // written its checkpoint.
+                        collective::any(c, false);
+                    }
+                    return Err(stopped);
                 }
                 let policy_start = Instant::now();
                 let critic_obs = critic_view(self.critic_is_actor, &self.obs, &self.critic_obs);
