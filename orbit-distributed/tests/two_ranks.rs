@@ -81,21 +81,32 @@ fn rank_trains_reach() {
         format!("seed={}", 3 + rank),
         "episode_length_s=0.5".into(),
     ];
-    let env = RlVecEnv::new(make(TASK_ID, &env_overrides).unwrap()).unwrap();
-    let cfg = reach_agent(&[
-        "seed=3",
-        "num_steps_per_env=8",
-        "empirical_normalization=true",
-    ]);
-    let log_dir = Path::new(&dir).join(format!("rank{rank}"));
-    let mut runner = OnPolicyRunner::new(env, cfg, Some(log_dir), Device::flex()).unwrap();
-    runner.distribute(mpi);
+    let runner_in = |name: String| {
+        let env = RlVecEnv::new(make(TASK_ID, &env_overrides).unwrap()).unwrap();
+        let cfg = reach_agent(&[
+            "seed=3",
+            "num_steps_per_env=8",
+            "empirical_normalization=true",
+        ]);
+        let log_dir = Path::new(&dir).join(name);
+        OnPolicyRunner::new(env, cfg, Some(log_dir), Device::flex()).unwrap()
+    };
+    let mut runner = runner_in(format!("rank{rank}"));
+    runner.distribute(mpi.clone());
     runner.learn(4).unwrap();
+    // Resumed from rank 0's checkpoint (once it is written) on both ranks, two more iterations.
+    mpi.all_gather(&[0], &mut [0; 2]);
+    let mut resumed = runner_in(format!("rank{rank}-resumed"));
+    resumed
+        .load_checkpoint(&Path::new(&dir).join("rank0").join("model_3"))
+        .unwrap();
+    resumed.distribute(mpi);
+    resumed.learn(2).unwrap();
 }
 
 /// After four updates on different envs, the two ranks' checkpoints (parameters, Adam's
 /// moments, learning rate, observation statistics) are bit-identical, while their logged
-/// returns differ.
+/// returns differ; resumed on both ranks from rank 0's checkpoint, they stay identical.
 #[test]
 fn replicas_stay_identical_while_their_envs_differ() {
     let dir = std::env::temp_dir().join(format!("orbit-two-ranks-{}", std::process::id()));
@@ -107,15 +118,22 @@ fn replicas_stay_identical_while_their_envs_differ() {
     };
     // The parameters' values (the files also hold their ids, which differ by process); equal
     // parameters after an update mean equal Adam moments before it.
-    let weights = |rank: usize| {
-        let base = dir.join(format!("rank{rank}")).join("model_3");
+    let weights_in = |run: String, checkpoint: &str| {
+        let base = dir.join(run).join(checkpoint);
         let s = orbit_rl::checkpoint::read_state(&base).unwrap();
         let (no, nc, na) = (s.num_obs, s.num_critic_obs, s.num_actions);
         let model = ActorCritic::new(&s.policy, no, nc, na, 0, &Device::flex());
         let model = orbit_rl::ppo::load_model(model, &base).unwrap();
         parameters_of(&model)
     };
+    let weights = |rank: usize| weights_in(format!("rank{rank}"), "model_3");
     assert!(weights(0) == weights(1), "the ranks' parameters differ");
+    let resumed = |rank: usize| weights_in(format!("rank{rank}-resumed"), "model_5");
+    assert!(
+        resumed(0) == resumed(1),
+        "the resumed ranks' parameters differ"
+    );
+    assert!(resumed(0) != weights(0), "the resumed run did not train");
     let state = |rank: usize| {
         let mut json: serde_json::Value =
             serde_json::from_slice(&read(rank, "model_3.json")).unwrap();
