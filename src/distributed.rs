@@ -1,11 +1,13 @@
-//! `train --distributed`: this process as one rank of an MPI job (one process per GPU, as
-//! Isaac Lab's `torchrun … --distributed`), in builds with the `distributed` feature.
+//! Data-parallel ranks for `train`: a process as one rank of an MPI job (`--distributed`, one
+//! process per GPU as Isaac Lab's `torchrun … --distributed`, in builds with the `distributed`
+//! feature), or threads of one process as ranks (`--ranks K`, which splits the CPU learner's
+//! update over cores).
 
 use std::sync::Arc;
 
 use orbit_rl::{Collective, RlError};
 
-/// This process's place in a data-parallel run.
+/// A rank's place in a data-parallel run.
 pub struct Rank {
     /// The rank group the learner exchanges through.
     pub collective: Arc<dyn Collective>,
@@ -17,8 +19,9 @@ pub struct Rank {
     pub local_rank: usize,
     /// Number of hosts.
     pub hosts: usize,
+    /// The MPI job, for a rank that is a process of one.
     #[cfg(feature = "distributed")]
-    mpi: Arc<orbit_distributed::Mpi>,
+    mpi: Option<Arc<orbit_distributed::Mpi>>,
 }
 
 impl Rank {
@@ -36,7 +39,7 @@ impl Rank {
             world_size: mpi.world_size(),
             local_rank: mpi.local_rank(),
             hosts: mpi.hosts(),
-            mpi,
+            mpi: Some(mpi),
         })
     }
 
@@ -71,12 +74,27 @@ impl Rank {
         )))
     }
 
+    /// A thread of this process as rank `thread.rank()` of a group of threads.
+    pub fn thread(thread: orbit_rl::collective::threads::ThreadRank) -> Self {
+        let (rank, world_size) = (thread.rank(), thread.world_size());
+        Self {
+            collective: Arc::new(thread),
+            rank,
+            world_size,
+            local_rank: rank,
+            hosts: 1,
+            #[cfg(feature = "distributed")]
+            mpi: None,
+        }
+    }
+
     /// Ends every rank with `status`: a rank that fails alone would leave the others waiting
     /// for it.
     pub fn abort(&self, status: u8) -> ! {
         #[cfg(feature = "distributed")]
-        self.mpi.abort(i32::from(status));
-        #[cfg(not(feature = "distributed"))]
+        if let Some(mpi) = &self.mpi {
+            mpi.abort(i32::from(status));
+        }
         std::process::exit(i32::from(status))
     }
 }

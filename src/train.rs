@@ -73,6 +73,11 @@ pub struct TrainArgs {
     /// and checkpoints. Needs a build with `--features distributed`.
     #[arg(long)]
     pub distributed: bool,
+    /// Train data-parallel as K threads of this process, each a rank with `num_envs` envs of
+    /// its own (seeded `seed + rank`) and a replica of the learner: the CPU learner's update,
+    /// which uses about one core in one process, runs on K. Results depend on K.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    pub ranks: u16,
     /// Config overrides: `env.<path>=<value>` for the env, `agent.<path>=<value>` for the runner,
     /// `bb.<path>=<value>` for a black-box task's wrapper (e.g. `env.episode_length_s=4.0
     /// agent.algorithm.learning_rate=3e-4 bb.trajectory[0].weights_scale=0.5`).
@@ -285,6 +290,17 @@ pub fn train_with(
     show_progress: bool,
     stop: Option<Arc<AtomicBool>>,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
+    if args.ranks > 1 {
+        if args.distributed {
+            return Err(RlError::EnvMismatch(
+                "--ranks (threads of one process) and --distributed (processes under MPI) \
+                 exclude each other: pass one"
+                    .into(),
+            )
+            .into());
+        }
+        return train_in_threads(args, show_progress, stop);
+    }
     if !args.distributed {
         return train_rank(args, show_progress, stop, None);
     }
@@ -297,12 +313,57 @@ pub fn train_with(
         );
     }
     let result = train_rank(args, show_progress && rank.rank == 0, stop, Some(&rank));
-    match &result {
-        Err(e) if rank.world_size > 1 && !is_interrupted(e.as_ref()) => {
-            eprintln!("error on rank {}: {e}", rank.rank);
-            rank.abort(crate::failure_status(e.as_ref()))
+    if let Err(e) = &result
+        && rank.world_size > 1
+    {
+        end_rank(&rank, e.as_ref());
+    }
+    result
+}
+
+/// [`train_with`] on `args.ranks` threads as ranks; rank 0, on this thread, logs and returns
+/// its runner. A rank that fails ends the process: the others would wait for it.
+fn train_in_threads(
+    args: &TrainArgs,
+    show_progress: bool,
+    stop: Option<Arc<AtomicBool>>,
+) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
+    let mut group = orbit_rl::collective::threads::group(usize::from(args.ranks)).into_iter();
+    let first = crate::distributed::Rank::thread(group.next().expect("at least one rank"));
+    println!(
+        "data-parallel training: {} ranks as threads of this process; rank 0 logs and \
+         checkpoints",
+        first.world_size
+    );
+    std::thread::scope(|s| {
+        for thread in group {
+            let stop = stop.clone();
+            s.spawn(move || {
+                let rank = crate::distributed::Rank::thread(thread);
+                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    train_rank(args, false, stop, Some(&rank)).map(drop)
+                }));
+                match result {
+                    Ok(Ok(())) => {}
+                    Ok(Err(e)) => end_rank(&rank, e.as_ref()),
+                    Err(_) => rank.abort(101),
+                }
+            });
         }
-        _ => result,
+        let result = train_rank(args, show_progress, stop, Some(&first));
+        if let Err(e) = &result {
+            end_rank(&first, e.as_ref());
+        }
+        result
+    })
+}
+
+/// After `e` on `rank`: every rank stops together on a stop request; any other error ends the
+/// run, named with the rank.
+fn end_rank(rank: &crate::distributed::Rank, e: &(dyn std::error::Error + 'static)) {
+    if !is_interrupted(e) {
+        eprintln!("error on rank {}: {e}", rank.rank);
+        rank.abort(crate::failure_status(e))
     }
 }
 

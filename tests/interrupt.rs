@@ -5,31 +5,17 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use clap::Parser;
+mod common;
+
+use common::reach_args;
 use orbit::signals::stop_on_signals;
-use orbit::train::{TrainArgs, train, train_with};
+use orbit::train::{train, train_with};
 
 /// The environment variable that makes [`train_until_signalled`] train (its log root).
 const CHILD_LOG_ROOT: &str = "ORBIT_TEST_TRAIN_CHILD_LOG_ROOT";
 
 /// The experiment directory of the reach task's runs.
 const EXPERIMENT: &str = "franka_reach";
-
-/// A small reach run under `log_root` with extra flags.
-fn reach_args(log_root: &Path, extra: &[&str]) -> TrainArgs {
-    let mut args = vec![
-        "train",
-        "--task",
-        "Reach-Franka-v0",
-        "--num-envs",
-        "8",
-        "--log-root",
-        log_root.to_str().unwrap(),
-        "agent.num_steps_per_env=8",
-    ];
-    args.extend_from_slice(extra);
-    TrainArgs::parse_from(args)
-}
 
 /// The child process of [`sigint_saves_a_checkpoint_that_resume_continues`]: trains until a
 /// signal stops it and exits as the `train` example does. Without the environment variable

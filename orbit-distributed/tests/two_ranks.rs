@@ -66,47 +66,51 @@ fn reach_agent(overrides: &[&str]) -> RunnerCfg {
     RunnerCfg::load(&agent, &o).unwrap()
 }
 
-/// One rank of [`replicas_stay_identical_while_their_envs_differ`]: 8 reach envs seeded by the
-/// rank, four iterations, a checkpoint in `<dir>/rank<r>`.
+/// One rank of [`replicas_stay_identical_while_their_envs_differ`] under MPI.
 #[test]
 #[ignore = "run on two MPI ranks by replicas_stay_identical_while_their_envs_differ"]
 fn rank_trains_reach() {
     let Ok(dir) = std::env::var(RANK_DIR) else {
         return;
     };
-    let mpi: Arc<dyn Collective> = Arc::new(Mpi::init().unwrap());
-    let rank = mpi.rank();
+    train_reach(Arc::new(Mpi::init().unwrap()), Path::new(&dir), "rank");
+}
+
+/// A rank's training: 8 reach envs seeded by the rank, four iterations with a checkpoint in
+/// `<dir>/<name><rank>`; then, from rank 0's checkpoint, two more in `<name><rank>-resumed`.
+fn train_reach(c: Arc<dyn Collective>, dir: &Path, name: &str) {
+    let rank = c.rank();
     let env_overrides = vec![
         "num_envs=8".to_string(),
         format!("seed={}", 3 + rank),
         "episode_length_s=0.5".into(),
     ];
-    let runner_in = |name: String| {
+    let runner_in = |run: String| {
         let env = RlVecEnv::new(make(TASK_ID, &env_overrides).unwrap()).unwrap();
         let cfg = reach_agent(&[
             "seed=3",
             "num_steps_per_env=8",
             "empirical_normalization=true",
         ]);
-        let log_dir = Path::new(&dir).join(name);
-        OnPolicyRunner::new(env, cfg, Some(log_dir), Device::flex()).unwrap()
+        OnPolicyRunner::new(env, cfg, Some(dir.join(run)), Device::flex()).unwrap()
     };
-    let mut runner = runner_in(format!("rank{rank}"));
-    runner.distribute(mpi.clone());
+    let mut runner = runner_in(format!("{name}{rank}"));
+    runner.distribute(c.clone());
     runner.learn(4).unwrap();
     // Resumed from rank 0's checkpoint (once it is written) on both ranks, two more iterations.
-    mpi.all_gather(&[0], &mut [0; 2]);
-    let mut resumed = runner_in(format!("rank{rank}-resumed"));
+    c.all_gather(&[0], &mut [0; 2]);
+    let mut resumed = runner_in(format!("{name}{rank}-resumed"));
     resumed
-        .load_checkpoint(&Path::new(&dir).join("rank0").join("model_3"))
+        .load_checkpoint(&dir.join(format!("{name}0")).join("model_3"))
         .unwrap();
-    resumed.distribute(mpi);
+    resumed.distribute(c);
     resumed.learn(2).unwrap();
 }
 
 /// After four updates on different envs, the two ranks' checkpoints (parameters, Adam's
 /// moments, learning rate, observation statistics) are bit-identical, while their logged
-/// returns differ; resumed on both ranks from rank 0's checkpoint, they stay identical.
+/// returns differ; resumed on both ranks from rank 0's checkpoint, they stay identical; two
+/// ranks as threads of one process end with the same bits.
 #[test]
 fn replicas_stay_identical_while_their_envs_differ() {
     let dir = std::env::temp_dir().join(format!("orbit-two-ranks-{}", std::process::id()));
@@ -134,6 +138,18 @@ fn replicas_stay_identical_while_their_envs_differ() {
         "the resumed ranks' parameters differ"
     );
     assert!(resumed(0) != weights(0), "the resumed run did not train");
+    // The same two ranks as threads of this process: the same bits as the MPI ranks.
+    std::thread::scope(|s| {
+        for thread in orbit_rl::collective::threads::group(2) {
+            let dir = &dir;
+            s.spawn(move || train_reach(Arc::new(thread), dir, "thread"));
+        }
+    });
+    assert!(
+        weights_in("thread1".into(), "model_3") == weights(0),
+        "thread ranks differ from MPI ranks"
+    );
+    assert!(weights_in("thread0-resumed".into(), "model_5") == resumed(0));
     let state = |rank: usize| {
         let mut json: serde_json::Value =
             serde_json::from_slice(&read(rank, "model_3.json")).unwrap();

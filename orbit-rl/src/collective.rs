@@ -104,22 +104,24 @@ pub(crate) fn normalize_across(c: &dyn Collective, x: &mut [f32]) {
     }
 }
 
-#[cfg(test)]
-pub(crate) mod threads {
-    //! A collective of threads in one process, for the learner's unit tests.
+pub mod threads {
+    //! Ranks as threads of one process, exchanging through shared memory: data-parallel
+    //! learners on one machine without a distributed engine (the CPU learner's update is
+    //! split this way over cores), and the learner's unit tests. A rank that stops calling
+    //! leaves the others waiting: end the process when one fails.
 
     use std::sync::{Arc, Barrier, Mutex};
 
     use super::Collective;
 
-    /// One rank of a group of threads exchanging through shared memory.
-    pub(crate) struct ThreadRank {
+    /// One rank of a group of threads.
+    pub struct ThreadRank {
         rank: usize,
         shared: Arc<(Barrier, Mutex<Vec<Vec<u8>>>)>,
     }
 
     /// `n` ranks; give each to its own thread.
-    pub(crate) fn group(n: usize) -> Vec<ThreadRank> {
+    pub fn group(n: usize) -> Vec<ThreadRank> {
         let shared = Arc::new((Barrier::new(n), Mutex::new(vec![Vec::new(); n])));
         (0..n)
             .map(|rank| ThreadRank {
@@ -134,13 +136,17 @@ pub(crate) mod threads {
             self.rank
         }
         fn world_size(&self) -> usize {
-            self.shared.1.lock().unwrap().len()
+            self.shared
+                .1
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .len()
         }
         fn all_gather(&self, local: &[u8], out: &mut [u8]) {
             let (barrier, slots) = &*self.shared;
-            slots.lock().unwrap()[self.rank] = local.to_vec();
+            slots.lock().unwrap_or_else(|e| e.into_inner())[self.rank] = local.to_vec();
             barrier.wait();
-            let all: Vec<u8> = slots.lock().unwrap().concat();
+            let all: Vec<u8> = slots.lock().unwrap_or_else(|e| e.into_inner()).concat();
             out.copy_from_slice(&all);
             // Nobody writes the next round's slot before everyone has read this one.
             barrier.wait();
