@@ -12,8 +12,7 @@ use orbit_distributed::Mpi;
 use orbit_envs::RlVecEnv;
 use orbit_managers::make;
 use orbit_physics_rapier as _;
-use orbit_rl::burn::module::{Module, ModuleVisitor, Param};
-use orbit_rl::burn::tensor::{Device, Tensor};
+use orbit_rl::burn::tensor::Device;
 use orbit_rl::model::ActorCritic;
 use orbit_rl::ppo::Ppo;
 use orbit_rl::{Collective, OnPolicyRunner, RunnerCfg};
@@ -128,7 +127,7 @@ fn replicas_stay_identical_while_their_envs_differ() {
         let (no, nc, na) = (s.num_obs, s.num_critic_obs, s.num_actions);
         let model = ActorCritic::new(&s.policy, no, nc, na, 0, &Device::flex());
         let model = orbit_rl::ppo::load_model(model, &base).unwrap();
-        parameters_of(&model)
+        model.parameter_values()
     };
     let weights = |rank: usize| weights_in(format!("rank{rank}"), "model_3");
     assert!(weights(0) == weights(1), "the ranks' parameters differ");
@@ -214,7 +213,7 @@ fn collect_and_update(p: &mut Ppo, first: usize, steps: usize) -> Vec<f32> {
     }
     p.compute_returns(&obs(steps));
     p.update().unwrap();
-    parameters(p)
+    p.model.parameter_values()
 }
 
 /// One rank of [`a_two_rank_update_equals_one_learner_on_the_whole_batch`]: rank 0 also
@@ -241,7 +240,7 @@ fn rank_updates_half_the_batch() {
     );
     if rank == 0 {
         let mut whole = learner(ENVS, STEPS);
-        let initial = parameters(&whole);
+        let initial = whole.model.parameter_values();
         let one = collect_and_update(&mut whole, 0, STEPS);
         let max_diff = |a: &[f32], b: &[f32]| {
             a.iter()
@@ -254,27 +253,6 @@ fn rank_updates_half_the_batch() {
         assert!(moved > 1e-3, "the update moved the parameters by {moved}");
         assert!(diff < 1e-6, "two ranks differ from one learner by {diff}");
     }
-}
-
-/// The learner's parameters, in visit order.
-fn parameters(p: &Ppo) -> Vec<f32> {
-    parameters_of(&p.model)
-}
-
-/// A model's parameters, in visit order.
-fn parameters_of(model: &ActorCritic) -> Vec<f32> {
-    let mut values = Vec::new();
-    struct Flatten<'a>(&'a mut Vec<f32>);
-    impl ModuleVisitor for Flatten<'_> {
-        fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
-            let t = param.val();
-            let n = t.shape().num_elements();
-            self.0
-                .extend(t.reshape([n]).into_data().try_into_vec::<f32>().unwrap());
-        }
-    }
-    model.visit(&mut Flatten(&mut values));
-    values
 }
 
 /// With a fixed rollout split over two ranks, the ranks end the update with bit-identical

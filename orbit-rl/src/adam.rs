@@ -301,20 +301,24 @@ impl ModuleMapper for AdamStep<'_> {
             .mul(rate);
         moments.first = m.into_bridge();
         moments.second = v.into_bridge();
-        // The update leaves the autodiff graph and comes back as a fresh leaf, with the
-        // parameter's gradient settings (burn's optimiser also restores a distributed-training
-        // marker; the learner trains on one device).
-        let require_grad = tensor.is_require_grad();
-        let checkpointing = tensor.gradient_checkpointing_strategy();
-        let mut updated = Tensor::from_inner(tensor.inner() - delta);
-        if let Some(strategy) = checkpointing {
-            updated = updated.with_gradient_checkpointing_strategy(strategy);
-        }
-        if require_grad {
-            updated = updated.require_grad();
-        }
+        let updated = leaf_like(tensor.clone().inner() - delta, &tensor);
         Param::from_mapped_value(id, updated, mapper)
     }
+}
+
+/// `value` (off the autodiff graph) as a fresh leaf with the gradient settings of the
+/// parameter tensor `like`: a parameter given new values (an Adam step, another rank's
+/// values) keeps requiring gradients. burn's optimiser also restores a distributed-training
+/// marker; the learner's replicas exchange through host memory instead.
+pub(crate) fn leaf_like<const D: usize>(value: Tensor<D>, like: &Tensor<D>) -> Tensor<D> {
+    let mut leaf = Tensor::from_inner(value);
+    if let Some(strategy) = like.gradient_checkpointing_strategy() {
+        leaf = leaf.with_gradient_checkpointing_strategy(strategy);
+    }
+    if like.is_require_grad() {
+        leaf = leaf.require_grad();
+    }
+    leaf
 }
 
 #[cfg(test)]

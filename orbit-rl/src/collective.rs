@@ -65,21 +65,21 @@ pub(crate) fn from_rank_0(c: &dyn Collective, local: &[f32]) -> Vec<f32> {
     gather_f32(c, local).swap_remove(0)
 }
 
+/// Every rank's `local` bytes, one `Vec` per rank in rank order.
+fn gather_bytes(c: &dyn Collective, local: &[u8]) -> Vec<Vec<u8>> {
+    gather(c, local, |b| [b], |[b]| b)
+}
+
 /// Whether `flag` is set on any rank.
 pub(crate) fn any(c: &dyn Collective, flag: bool) -> bool {
-    let mut all = vec![0u8; c.world_size()];
-    c.all_gather(&[u8::from(flag)], &mut all);
-    all.iter().any(|&f| f != 0)
+    gather_bytes(c, &[u8::from(flag)]).iter().any(|f| f[0] != 0)
 }
 
 /// The ranks whose `value` differs from this rank's (every rank passes a value of the same
 /// length): ranks that must agree on something compare it with this.
 pub fn ranks_differing(c: &dyn Collective, value: &[u8]) -> Vec<usize> {
-    let mut all = vec![0u8; value.len() * c.world_size()];
-    c.all_gather(value, &mut all);
-    (0..c.world_size())
-        .filter(|&rank| all[rank * value.len()..(rank + 1) * value.len()] != *value)
-        .collect()
+    let ranks = gather_bytes(c, value);
+    (0..ranks.len()).filter(|&r| ranks[r] != value).collect()
 }
 
 /// Normalises `x` to mean 0 and unbiased standard deviation 1 over every rank's values, as
@@ -98,10 +98,7 @@ pub(crate) fn normalize_across(c: &dyn Collective, x: &mut [f32]) {
         .map(|&v| (f64::from(v) - mean).powi(2))
         .sum::<f64>();
     let var = gather_f64(c, &[local_sq]).iter().map(|r| r[0]).sum::<f64>() / (n - 1.0);
-    let scale = 1.0 / (var.sqrt() + 1e-8);
-    for v in x {
-        *v = ((f64::from(*v) - mean) * scale) as f32;
-    }
+    crate::storage::standardize(x, mean, var);
 }
 
 pub mod threads {

@@ -1,7 +1,7 @@
 //! The actor-critic network (RSL-RL's `ActorCritic`): two MLPs and a state-independent
 //! Gaussian noise parameter.
 
-use burn::module::{Module, Param};
+use burn::module::{Module, ModuleVisitor, Param};
 use burn::nn::Linear;
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use orbit_core::rng::EnvRng;
@@ -174,6 +174,20 @@ pub struct ActorCritic {
 }
 
 impl ActorCritic {
+    /// Every parameter's values, flattened, in visit order (the order replicas exchange
+    /// them in).
+    pub fn parameter_values(&self) -> Vec<f32> {
+        struct Flatten(Vec<f32>);
+        impl ModuleVisitor for Flatten {
+            fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+                self.0.extend(crate::ppo::values(param.val()));
+            }
+        }
+        let mut flat = Flatten(Vec::new());
+        self.visit(&mut flat);
+        flat.0
+    }
+
     /// Builds the network for `num_obs` actor inputs, `num_critic_obs` critic inputs and
     /// `num_actions` outputs; weights are drawn from `seed`'s stream.
     pub fn new(

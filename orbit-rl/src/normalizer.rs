@@ -54,9 +54,13 @@ impl EmpiricalNormalizer {
         }
     }
 
-    /// [`update`](Self::update) with every rank's batch: each rank's batch statistics are
-    /// gathered and folded in rank order, so every rank holds the same statistics.
-    pub fn update_across(&mut self, c: &dyn Collective, x: &[f32]) {
+    /// [`update`](Self::update) with every rank's batch when `ranks` is a data-parallel run's
+    /// group (else this process's alone): each rank's batch statistics are gathered and folded
+    /// in rank order, so every rank holds the same statistics.
+    pub fn update_across(&mut self, ranks: Option<&dyn Collective>, x: &[f32]) {
+        let Some(c) = ranks else {
+            return self.update(x);
+        };
         // Frozen on one rank is frozen on all: they hold the same count.
         if self.frozen() {
             return;

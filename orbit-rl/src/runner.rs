@@ -103,8 +103,6 @@ pub struct OnPolicyRunner<E: VecEnv> {
     /// [`RlError::Interrupted`].
     pub stop: Option<Arc<AtomicBool>>,
     device: Device,
-    /// The other ranks of a data-parallel run (see [`distribute`](Self::distribute)).
-    collective: Option<Arc<dyn Collective>>,
 }
 
 impl<E: VecEnv> OnPolicyRunner<E> {
@@ -170,7 +168,6 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             show_progress: false,
             stop: None,
             device,
-            collective: None,
         })
     }
 
@@ -181,8 +178,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
     /// checkpoint to resume. Each rank steps its own envs (seed them apart); only the rank
     /// given a log directory writes logs and checkpoints. Logged env steps count every rank's.
     pub fn distribute(&mut self, c: Arc<dyn Collective>) {
-        self.alg.distribute(c.clone());
-        self.collective = Some(c);
+        self.alg.distribute(c);
     }
 
     /// The run directory, if logging to files.
@@ -213,10 +209,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         for (norm, x, out) in std::iter::once(actor).chain(critic) {
             match norm {
                 Some(n) => {
-                    match (update, self.collective.as_deref()) {
-                        (false, _) => {}
-                        (true, Some(c)) => n.update_across(c, x),
-                        (true, None) => n.update(x),
+                    if update {
+                        n.update_across(self.alg.collective(), x);
                     }
                     n.normalize_into(x, out);
                 }
@@ -240,8 +234,8 @@ impl<E: VecEnv> OnPolicyRunner<E> {
     /// checkpoint every `save_interval` iterations and after the last.
     pub fn learn(&mut self, num_iterations: usize) -> Result<(), RlError> {
         let (rank, ranks) = self
-            .collective
-            .as_deref()
+            .alg
+            .collective()
             .map_or((0, 1), |c| (c.rank(), c.world_size()));
         if self.iteration == 0 && self.cfg.init_at_random_ep_len {
             self.env
@@ -278,7 +272,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                         p.finish();
                     }
                     let stopped = self.stop_with_checkpoint()?;
-                    if let Some(c) = self.collective.as_deref() {
+                    if let Some(c) = self.alg.collective() {
                         // No rank ends (and lets the launcher end the job) before rank 0 has
                         // written its checkpoint.
                         collective::any(c, false);
@@ -398,7 +392,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             .stop
             .as_ref()
             .is_some_and(|s| s.load(Ordering::Relaxed));
-        match self.collective.as_deref() {
+        match self.alg.collective() {
             Some(c) => collective::any(c, local),
             None => local,
         }

@@ -181,6 +181,11 @@ pub fn normalize(x: &mut [f32]) {
         .map(|&v| (f64::from(v) - mean).powi(2))
         .sum::<f64>()
         / (n - 1) as f64;
+    standardize(x, mean, var);
+}
+
+/// `(x − mean) / (√var + 1e-8)` in place, the last step of [`normalize`].
+pub(crate) fn standardize(x: &mut [f32], mean: f64, var: f64) {
     let scale = 1.0 / (var.sqrt() + 1e-8);
     for v in x {
         *v = ((f64::from(*v) - mean) * scale) as f32;

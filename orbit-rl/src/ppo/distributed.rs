@@ -11,6 +11,7 @@ use burn::tensor::{Tensor, TensorData};
 use orbit_core::rng::EnvRng;
 
 use super::{Ppo, tensor1, values};
+use crate::adam::leaf_like;
 use crate::collective::{self, Collective};
 use crate::model::ActorCritic;
 use crate::streams;
@@ -21,18 +22,14 @@ impl Ppo {
     /// the other ranks. Its envs are numbered from `rank · num_envs` for the action noise,
     /// as if one learner held every rank's envs.
     pub fn distribute(&mut self, c: Arc<dyn Collective>) {
-        self.set_first_env(c.rank() * self.storage.num_envs);
-        self.model = broadcast_parameters(&*c, self.model.clone());
-        self.rollout_model = None;
-        self.collective = Some(c);
-    }
-
-    /// Numbers this learner's envs from `first_env` for the action-noise streams.
-    pub fn set_first_env(&mut self, first_env: usize) {
-        let first = u32::try_from(first_env).expect("env numbers fit in u32");
+        let first =
+            u32::try_from(c.rank() * self.storage.num_envs).expect("env numbers fit in u32");
         self.noise = (0..self.storage.num_envs as u32)
             .map(|e| EnvRng::new(self.seed, first + e, streams::ACTION_NOISE))
             .collect();
+        self.model = broadcast_parameters(&*c, self.model.clone());
+        self.rollout_model = None;
+        self.collective = Some(c);
     }
 
     /// The rank group, when this learner is a replica of a data-parallel run.
@@ -43,12 +40,6 @@ impl Ppo {
 
 /// `model` with rank 0's parameter values.
 fn broadcast_parameters(c: &dyn Collective, model: ActorCritic) -> ActorCritic {
-    struct Flatten(Vec<f32>);
-    impl ModuleVisitor for Flatten {
-        fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
-            self.0.extend(values(param.val()));
-        }
-    }
     struct Replace(std::vec::IntoIter<f32>);
     impl ModuleMapper for Replace {
         fn map_float<const D: usize>(&mut self, param: Param<Tensor<D>>) -> Param<Tensor<D>> {
@@ -56,20 +47,15 @@ fn broadcast_parameters(c: &dyn Collective, model: ActorCritic) -> ActorCritic {
             let dims = tensor.dims();
             let n = tensor.shape().num_elements();
             let data: Vec<f32> = self.0.by_ref().take(n).collect();
-            let inner = tensor.clone().inner();
-            let mut value = Tensor::from_inner(Tensor::from_data(
-                TensorData::new(data, dims),
-                &inner.device(),
-            ));
-            if tensor.is_require_grad() {
-                value = value.require_grad();
-            }
+            let device = tensor.clone().inner().device();
+            let value = leaf_like(
+                Tensor::from_data(TensorData::new(data, dims), &device),
+                &tensor,
+            );
             Param::from_mapped_value(id, value, mapper)
         }
     }
-    let mut flat = Flatten(Vec::new());
-    model.visit(&mut flat);
-    let root = collective::from_rank_0(c, &flat.0);
+    let root = collective::from_rank_0(c, &model.parameter_values());
     model.map(&mut Replace(root.into_iter()))
 }
 
@@ -81,17 +67,16 @@ pub(super) fn average_gradients(
     grads: &mut GradientsParams,
     kl: Tensor<1>,
 ) -> Tensor<1> {
+    // Each gradient has its parameter's shape: the flat mean is cut back along the same visit.
     struct Flatten<'a> {
         grads: &'a GradientsParams,
         parts: Vec<Tensor<1>>,
-        shapes: Vec<Vec<usize>>,
     }
     impl ModuleVisitor for Flatten<'_> {
         fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
             if let Some(g) = self.grads.get::<D>(param.id) {
-                let dims = g.dims();
-                self.parts.push(g.reshape([dims.iter().product::<usize>()]));
-                self.shapes.push(dims.to_vec());
+                let n = g.shape().num_elements();
+                self.parts.push(g.reshape([n]));
             }
         }
     }
@@ -100,11 +85,9 @@ pub(super) fn average_gradients(
     let mut flat = Flatten {
         grads,
         parts: Vec::new(),
-        shapes: Vec::new(),
     };
     model.visit(&mut flat);
-    let Flatten { parts, shapes, .. } = flat;
-    let mut parts = parts;
+    let mut parts = flat.parts;
     parts.push(kl);
     let local = values(Tensor::cat(parts, 0));
     let mean = tensor1(collective::mean_f32(c, &local), &device);
@@ -112,18 +95,11 @@ pub(super) fn average_gradients(
         grads: &'a mut GradientsParams,
         mean: &'a Tensor<1>,
         offset: usize,
-        shapes: std::slice::Iter<'a, Vec<usize>>,
     }
     impl ModuleVisitor for Register<'_> {
         fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
             if self.grads.get::<D>(param.id).is_some() {
-                let shape: [usize; D] = self
-                    .shapes
-                    .next()
-                    .expect("one shape per gradient")
-                    .as_slice()
-                    .try_into()
-                    .expect("the gradient has the parameter's rank");
+                let shape = param.dims();
                 let n: usize = shape.iter().product();
                 let g = self
                     .mean
@@ -139,7 +115,6 @@ pub(super) fn average_gradients(
         grads,
         mean: &mean,
         offset: 0,
-        shapes: shapes.iter(),
     };
     model.visit(&mut register);
     let offset = register.offset;
@@ -150,14 +125,11 @@ pub(super) fn average_gradients(
 mod tests {
     use std::sync::Arc;
 
-    use burn::module::{Module, ModuleVisitor, Param};
-    use burn::tensor::Tensor;
-
     use crate::collective::Collective;
     use crate::collective::threads::group;
     use crate::normalizer::EmpiricalNormalizer;
+    use crate::ppo::Ppo;
     use crate::ppo::fixtures::ppo;
-    use crate::ppo::{Ppo, values};
 
     const ENVS: usize = 16;
     const STEPS: usize = 4;
@@ -199,20 +171,7 @@ mod tests {
         }
         p.compute_returns(&obs_of(STEPS));
         p.update().unwrap();
-        (parameters(p), p.learning_rate())
-    }
-
-    /// The learner's parameter values, in visit order.
-    fn parameters(p: &Ppo) -> Vec<f32> {
-        struct Flatten(Vec<f32>);
-        impl ModuleVisitor for Flatten {
-            fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
-                self.0.extend(values(param.val()));
-            }
-        }
-        let mut flat = Flatten(Vec::new());
-        p.model.visit(&mut flat);
-        flat.0
+        (p.model.parameter_values(), p.learning_rate())
     }
 
     /// Two ranks with half the envs each end an update with bit-identical parameters, equal
@@ -222,7 +181,7 @@ mod tests {
     #[test]
     fn two_ranks_update_as_one_learner_on_the_whole_batch() {
         let mut before = learner(ENVS);
-        let initial = parameters(&before);
+        let initial = before.model.parameter_values();
         let (whole, whole_rate) = rollout_and_update(&mut before, 0);
         let ranks: Vec<(Vec<f32>, f64)> = std::thread::scope(|s| {
             let handles: Vec<_> = group(2)

@@ -49,10 +49,7 @@ impl Ppo {
         // statistics, then express the returns and the old values (for value clipping) in
         // them.
         if let Some(normalizer) = &mut self.value_normalizer {
-            match collective {
-                Some(c) => normalizer.update_across(c, &self.storage.returns),
-                None => normalizer.update(&self.storage.returns),
-            }
+            normalizer.update_across(collective, &self.storage.returns);
             normalizer.normalize(&mut self.storage.returns);
             normalizer.normalize(&mut self.storage.values);
         }
