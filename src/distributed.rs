@@ -11,12 +11,6 @@ use orbit_rl::{Collective, RlError};
 pub struct Rank {
     /// The rank group the learner exchanges through.
     pub collective: Arc<dyn Collective>,
-    /// Rank among all processes.
-    pub rank: usize,
-    /// Number of ranks.
-    pub world_size: usize,
-    /// Rank among the processes on this host (it picks the host's GPU).
-    pub local_rank: usize,
     /// Number of hosts.
     pub hosts: usize,
     /// The MPI job, for a rank that is a process of one.
@@ -35,12 +29,19 @@ impl Rank {
         share_cores(mpi.local_size());
         Ok(Self {
             collective: mpi.clone(),
-            rank: mpi.rank(),
-            world_size: mpi.world_size(),
-            local_rank: mpi.local_rank(),
             hosts: mpi.hosts(),
             mpi: Some(mpi),
         })
+    }
+
+    /// This rank, `0..world_size()`.
+    pub fn rank(&self) -> usize {
+        self.collective.rank()
+    }
+
+    /// Number of ranks.
+    pub fn world_size(&self) -> usize {
+        self.collective.world_size()
     }
 
     /// Without the `distributed` feature: an error that says how to build it.
@@ -70,18 +71,14 @@ impl Rank {
              training config); ranks must train alike. A rank without a GPU of its own picks \
              another backend under `sim.backend: \"auto\"`: start at most one rank per GPU of a \
              host, or pass --backend",
-            self.rank
+            self.rank()
         )))
     }
 
     /// A thread of this process as rank `thread.rank()` of a group of threads.
     pub fn thread(thread: orbit_rl::collective::threads::ThreadRank) -> Self {
-        let (rank, world_size) = (thread.rank(), thread.world_size());
         Self {
             collective: Arc::new(thread),
-            rank,
-            world_size,
-            local_rank: rank,
             hosts: 1,
             #[cfg(feature = "distributed")]
             mpi: None,

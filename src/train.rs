@@ -306,15 +306,16 @@ pub fn train_with(
     }
     // Before the GPU is first used: it picks this rank's.
     let rank = crate::distributed::Rank::join()?;
-    if rank.rank == 0 {
+    if rank.rank() == 0 {
         println!(
             "data-parallel training: {} ranks on {} host(s) (MPI); rank 0 logs and checkpoints",
-            rank.world_size, rank.hosts
+            rank.world_size(),
+            rank.hosts
         );
     }
-    let result = train_rank(args, show_progress && rank.rank == 0, stop, Some(&rank));
+    let result = train_rank(args, show_progress && rank.rank() == 0, stop, Some(&rank));
     if let Err(e) = &result
-        && rank.world_size > 1
+        && rank.world_size() > 1
     {
         end_rank(&rank, e.as_ref());
     }
@@ -322,47 +323,57 @@ pub fn train_with(
 }
 
 /// [`train_with`] on `args.ranks` threads as ranks; rank 0, on this thread, logs and returns
-/// its runner. A rank that fails ends the process: the others would wait for it.
+/// its runner.
 fn train_in_threads(
     args: &TrainArgs,
     show_progress: bool,
     stop: Option<Arc<AtomicBool>>,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
-    let mut group = orbit_rl::collective::threads::group(usize::from(args.ranks)).into_iter();
-    let first = crate::distributed::Rank::thread(group.next().expect("at least one rank"));
+    let group = orbit_rl::collective::threads::group(usize::from(args.ranks));
     println!(
         "data-parallel training: {} ranks as threads of this process; rank 0 logs and \
          checkpoints",
-        first.world_size
+        group.len()
     );
+    let mut group = group.into_iter();
+    let first = group.next().expect("at least one rank");
     std::thread::scope(|s| {
         for thread in group {
             let stop = stop.clone();
-            s.spawn(move || {
-                let rank = crate::distributed::Rank::thread(thread);
-                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    train_rank(args, false, stop, Some(&rank)).map(drop)
-                }));
-                match result {
-                    Ok(Ok(())) => {}
-                    Ok(Err(e)) => end_rank(&rank, e.as_ref()),
-                    Err(_) => rank.abort(101),
-                }
-            });
+            s.spawn(move || drop(train_thread_rank(args, false, stop, thread)));
         }
-        let result = train_rank(args, show_progress, stop, Some(&first));
-        if let Err(e) = &result {
-            end_rank(&first, e.as_ref());
-        }
-        result
+        train_thread_rank(args, show_progress, stop, first)
     })
+}
+
+/// One thread rank's training. A failure other than a stop, a panic included, ends the
+/// process: the other ranks would wait for this one.
+fn train_thread_rank(
+    args: &TrainArgs,
+    show_progress: bool,
+    stop: Option<Arc<AtomicBool>>,
+    thread: orbit_rl::collective::threads::ThreadRank,
+) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
+    let rank = crate::distributed::Rank::thread(thread);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train_rank(args, show_progress, stop, Some(&rank))
+    }));
+    match result {
+        Ok(result) => {
+            if let Err(e) = &result {
+                end_rank(&rank, e.as_ref());
+            }
+            result
+        }
+        Err(_) => rank.abort(101),
+    }
 }
 
 /// After `e` on `rank`: every rank stops together on a stop request; any other error ends the
 /// run, named with the rank.
 fn end_rank(rank: &crate::distributed::Rank, e: &(dyn std::error::Error + 'static)) {
     if !is_interrupted(e) {
-        eprintln!("error on rank {}: {e}", rank.rank);
+        eprintln!("error on rank {}: {e}", rank.rank());
         rank.abort(crate::failure_status(e))
     }
 }
@@ -395,7 +406,7 @@ fn train_rank(
         ))?;
         // Each rank's envs differ (Isaac Lab seeds them by rank); the learner's seed is shared.
         run.env_overrides
-            .push(format!("seed={}", run.agent.seed + r.rank as u64));
+            .push(format!("seed={}", run.agent.seed + r.rank() as u64));
     }
     let cfg = run.agent.clone();
     let resume_from = if args.resume {
@@ -412,20 +423,21 @@ fn train_rank(
         let n: usize = orbit_core::config::from_node(n)?;
         cfg.validate_batch(n, &agent_file(&run.configs)?.display().to_string())?;
     }
-    if rank.is_some_and(|r| r.rank > 0) {
-        let mut runner = start_runner(args, &run, &env_doc, None, resume_from.as_deref(), false)?;
-        runner.stop = stop;
-        runner.distribute(rank.expect("a rank").collective.clone());
-        runner.learn(cfg.max_iterations)?;
-        return Ok(runner);
-    }
-    // Only once the configs and the checkpoint to resume are known to be good.
-    let dir = create_run_dir(&args.log_root, &cfg.experiment_name, &cfg.run_name)?;
+    // Only once the configs and the checkpoint to resume are known to be good; only rank 0
+    // of a data-parallel run logs.
+    let dir = match rank {
+        Some(r) if r.rank() > 0 => None,
+        _ => Some(create_run_dir(
+            &args.log_root,
+            &cfg.experiment_name,
+            &cfg.run_name,
+        )?),
+    };
     let mut runner = match start_runner(
         args,
         &run,
         &env_doc,
-        Some(&dir),
+        dir.as_deref(),
         resume_from.as_deref(),
         show_progress,
     ) {
@@ -433,7 +445,9 @@ fn train_rank(
         Err(e) => {
             // The directory holds only what this run just wrote: leave no run without a
             // checkpoint behind.
-            let _ = std::fs::remove_dir_all(&dir);
+            if let Some(dir) = &dir {
+                let _ = std::fs::remove_dir_all(dir);
+            }
             return Err(e);
         }
     };
