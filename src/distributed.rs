@@ -5,6 +5,7 @@
 
 use std::sync::Arc;
 
+use orbit_rl::collective::threads::ThreadRank;
 use orbit_rl::{Collective, RlError};
 
 /// A rank's place in a data-parallel run.
@@ -16,6 +17,8 @@ pub struct Rank {
     /// The MPI job, for a rank that is a process of one.
     #[cfg(feature = "distributed")]
     mpi: Option<Arc<orbit_distributed::Mpi>>,
+    /// The thread group, for a rank that is a thread.
+    thread: Option<Arc<ThreadRank>>,
 }
 
 impl Rank {
@@ -31,6 +34,7 @@ impl Rank {
             collective: mpi.clone(),
             hosts: mpi.hosts(),
             mpi: Some(mpi),
+            thread: None,
         })
     }
 
@@ -76,18 +80,24 @@ impl Rank {
     }
 
     /// A thread of this process as rank `thread.rank()` of a group of threads.
-    pub fn thread(thread: orbit_rl::collective::threads::ThreadRank) -> Self {
+    pub fn thread(thread: ThreadRank) -> Self {
+        let thread = Arc::new(thread);
         Self {
-            collective: Arc::new(thread),
+            collective: thread.clone(),
             hosts: 1,
             #[cfg(feature = "distributed")]
             mpi: None,
+            thread: Some(thread),
         }
     }
 
-    /// Ends every rank with `status`: a rank that fails alone would leave the others waiting
-    /// for it.
-    pub fn abort(&self, status: u8) -> ! {
+    /// Ends every rank after a failure on this one: a rank that fails alone would leave the
+    /// others waiting for it. Thread ranks leave their next exchange (see
+    /// [`ThreadRank::abort`]) and this returns; a process rank ends the job with `status`.
+    pub fn abort(&self, status: u8) {
+        if let Some(thread) = &self.thread {
+            return thread.abort();
+        }
         #[cfg(feature = "distributed")]
         if let Some(mpi) = &self.mpi {
             mpi.abort(i32::from(status));

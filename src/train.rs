@@ -11,6 +11,9 @@ use orbit_render::VideoCfg;
 use orbit_rl::run_dir::{ENV_CONFIG_FILE, PARAMS_DIR, create_run_dir, find_checkpoint};
 use orbit_rl::{OnPolicyRunner, RlError, RunnerCfg, VecEnv};
 
+mod ranks;
+pub use ranks::{AUTO_MIN_ENVS_PER_RANK, AUTO_RANKS_MAX, RankCount, thread_ranks};
+
 /// The training config in a run's `params/` (`--agent-config` takes it back).
 pub const AGENT_CONFIG_FILE: &str = "agent.ron";
 /// The black-box config in a run's `params/` (`--bb-config` takes it back).
@@ -73,11 +76,14 @@ pub struct TrainArgs {
     /// and checkpoints. Needs a build with `--features distributed`.
     #[arg(long)]
     pub distributed: bool,
-    /// Train data-parallel as K threads of this process, each a rank with `num_envs` envs of
-    /// its own (seeded `seed + rank`) and a replica of the learner: the CPU learner's update,
-    /// which uses about one core in one process, runs on K. Results depend on K.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
-    pub ranks: u16,
+    /// Train data-parallel as K threads of this process (`auto`: one per core, at most 8 and
+    /// with at least 64 envs each, when the physics and the learner both run on the CPU; else
+    /// 1). The run's `num_envs` envs are
+    /// shared out, each rank stepping its share (seeded `seed + rank`) and updating a replica
+    /// of the learner on it: the CPU learner's update, which uses about one core in one
+    /// process, runs on K. Results depend on K.
+    #[arg(long, default_value = "auto")]
+    pub ranks: RankCount,
     /// Config overrides: `env.<path>=<value>` for the env, `agent.<path>=<value>` for the runner,
     /// `bb.<path>=<value>` for a black-box task's wrapper (e.g. `env.episode_length_s=4.0
     /// agent.algorithm.learning_rate=3e-4 bb.trajectory[0].weights_scale=0.5`).
@@ -85,6 +91,7 @@ pub struct TrainArgs {
 }
 
 /// The resolved configs of a run.
+#[derive(Clone)]
 pub struct ResolvedRun {
     /// The run's config files.
     pub configs: crate::RunConfigs,
@@ -96,6 +103,10 @@ pub struct ResolvedRun {
     pub env_overrides: Vec<String>,
     /// Overrides of a black-box task's wrapper config.
     pub black_box_overrides: Vec<String>,
+    /// Whether the physics runs on the CPU (rapier, or the wgpu kernel on a CPU adapter).
+    pub physics_on_cpu: bool,
+    /// The physics backend's name.
+    pub backend: String,
 }
 
 /// Config overrides sorted by target.
@@ -196,6 +207,8 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         agent_doc,
         env_overrides,
         black_box_overrides,
+        physics_on_cpu: backend.probe.kind.is_cpu(),
+        backend: backend.name,
     })
 }
 
@@ -290,110 +303,29 @@ pub fn train_with(
     show_progress: bool,
     stop: Option<Arc<AtomicBool>>,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
-    if args.ranks > 1 {
-        if args.distributed {
-            return Err(RlError::EnvMismatch(
-                "--ranks (threads of one process) and --distributed (processes under MPI) \
-                 exclude each other: pass one"
-                    .into(),
-            )
-            .into());
-        }
-        return train_in_threads(args, show_progress, stop);
+    if args.distributed {
+        return ranks::train_in_mpi_job(args, show_progress, stop);
     }
-    if !args.distributed {
-        return train_rank(args, show_progress, stop, None);
-    }
-    // Before the GPU is first used: it picks this rank's.
-    let rank = crate::distributed::Rank::join()?;
-    if rank.rank() == 0 {
-        println!(
-            "data-parallel training: {} ranks on {} host(s) (MPI); rank 0 logs and checkpoints",
-            rank.world_size(),
-            rank.hosts
-        );
-    }
-    let result = train_rank(args, show_progress && rank.rank() == 0, stop, Some(&rank));
-    if let Err(e) = &result
-        && rank.world_size() > 1
-    {
-        end_rank(&rank, e.as_ref());
-    }
-    result
-}
-
-/// [`train_with`] on `args.ranks` threads as ranks; rank 0, on this thread, logs and returns
-/// its runner.
-fn train_in_threads(
-    args: &TrainArgs,
-    show_progress: bool,
-    stop: Option<Arc<AtomicBool>>,
-) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
-    let group = orbit_rl::collective::threads::group(usize::from(args.ranks));
-    println!(
-        "data-parallel training: {} ranks as threads of this process; rank 0 logs and \
-         checkpoints",
-        group.len()
-    );
-    let mut group = group.into_iter();
-    let first = group.next().expect("at least one rank");
-    std::thread::scope(|s| {
-        for thread in group {
-            let stop = stop.clone();
-            s.spawn(move || drop(train_thread_rank(args, false, stop, thread)));
-        }
-        train_thread_rank(args, show_progress, stop, first)
-    })
-}
-
-/// One thread rank's training. A failure other than a stop, a panic included, ends the
-/// process: the other ranks would wait for this one.
-fn train_thread_rank(
-    args: &TrainArgs,
-    show_progress: bool,
-    stop: Option<Arc<AtomicBool>>,
-    thread: orbit_rl::collective::threads::ThreadRank,
-) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
-    let rank = crate::distributed::Rank::thread(thread);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        train_rank(args, show_progress, stop, Some(&rank))
-    }));
-    match result {
-        Ok(result) => {
-            if let Err(e) = &result {
-                end_rank(&rank, e.as_ref());
-            }
-            result
-        }
-        Err(_) => rank.abort(101),
+    let run = resolve(args)?;
+    let total_envs = ranks::run_num_envs(&run)?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match ranks::thread_ranks(args.ranks, &run, total_envs, cores)? {
+        1 => train_rank(args, run, show_progress, stop, None, 1),
+        k => ranks::train_in_threads(args, run, show_progress, stop, k, total_envs),
     }
 }
 
-/// After `e` on `rank`: every rank stops together on a stop request; any other error ends the
-/// run, named with the rank.
-fn end_rank(rank: &crate::distributed::Rank, e: &(dyn std::error::Error + 'static)) {
-    if !is_interrupted(e) {
-        eprintln!("error on rank {}: {e}", rank.rank());
-        rank.abort(crate::failure_status(e))
-    }
-}
-
-/// Whether `e` is a stop request's end (every rank stops together).
-fn is_interrupted(e: &(dyn std::error::Error + 'static)) -> bool {
-    matches!(
-        e.downcast_ref::<RlError>(),
-        Some(RlError::Interrupted { .. })
-    )
-}
-
-/// [`train_with`] as one rank of a data-parallel run (`rank`), or alone.
+/// [`train_with`] of the resolved `run` as one rank of a data-parallel run (`rank`), or
+/// alone; `share`: the number of thread ranks the run's envs are shared out to (1: this rank
+/// steps them all).
 fn train_rank(
     args: &TrainArgs,
+    mut run: ResolvedRun,
     show_progress: bool,
     stop: Option<Arc<AtomicBool>>,
     rank: Option<&crate::distributed::Rank>,
+    share: usize,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
-    let mut run = resolve(args)?;
     if let Some(r) = rank {
         let env_settings: Vec<&str> = (run.env_overrides.iter())
             .filter(|o| !o.starts_with("seed="))
@@ -418,10 +350,14 @@ fn train_rank(
     } else {
         None
     };
+    // `params/env.ron` holds the run's envs, all of them: it repeats the run.
     let env_doc = orbit_managers::load_env_config(&run.configs.env, &run.env_overrides)?;
     if let Some(n) = orbit_core::config::node_at(&env_doc, "num_envs") {
-        let n: usize = orbit_core::config::from_node(n)?;
+        let n = orbit_core::config::from_node::<usize>(n)? / share;
         cfg.validate_batch(n, &agent_file(&run.configs)?.display().to_string())?;
+        if share > 1 {
+            run.env_overrides.push(format!("num_envs={n}"));
+        }
     }
     // Only once the configs and the checkpoint to resume are known to be good; only rank 0
     // of a data-parallel run logs.
@@ -440,6 +376,7 @@ fn train_rank(
         dir.as_deref(),
         resume_from.as_deref(),
         show_progress,
+        share,
     ) {
         Ok(runner) => runner,
         Err(e) => {
@@ -477,6 +414,7 @@ fn start_runner(
     dir: Option<&Path>,
     resume_from: Option<&Path>,
     show_progress: bool,
+    share: usize,
 ) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
     if let Some(dir) = dir {
         write_params(dir, run, env_doc)?;
@@ -502,7 +440,7 @@ fn start_runner(
             "{}: {} envs × {} steps per iteration, {} iterations (env built in {:.1} s); run \
              directory {}",
             run.configs.name,
-            vec_env.num_envs(),
+            vec_env.num_envs() * share,
             cfg.num_steps_per_env,
             cfg.max_iterations,
             build_start.elapsed().as_secs_f64(),

@@ -15,7 +15,7 @@ use orbit_physics_rapier as _;
 use orbit_rl::burn::tensor::Device;
 use orbit_rl::model::ActorCritic;
 use orbit_rl::ppo::Ppo;
-use orbit_rl::{Collective, OnPolicyRunner, RunnerCfg};
+use orbit_rl::{Collective, OnPolicyRunner, RunnerCfg, VecEnv};
 use orbit_task_reach::TASK_ID;
 
 /// The environment variable that gives a rank its output directory.
@@ -96,6 +96,8 @@ fn train_reach(c: Arc<dyn Collective>, dir: &Path, name: &str) {
     let mut runner = runner_in(format!("{name}{rank}"));
     runner.distribute(c.clone());
     runner.learn(4).unwrap();
+    let obs = format!("{:?}", runner.env.observations());
+    std::fs::write(dir.join(format!("{name}{rank}")).join("observations"), obs).unwrap();
     // Resumed from rank 0's checkpoint (once it is written) on both ranks, two more iterations.
     c.all_gather(&[0], &mut [0; 2]);
     let mut resumed = runner_in(format!("{name}{rank}-resumed"));
@@ -107,8 +109,8 @@ fn train_reach(c: Arc<dyn Collective>, dir: &Path, name: &str) {
 }
 
 /// After four updates on different envs, the two ranks' checkpoints (parameters, Adam's
-/// moments, learning rate, observation statistics) are bit-identical, while their logged
-/// returns differ; resumed on both ranks from rank 0's checkpoint, they stay identical; two
+/// moments, learning rate, observation statistics) are bit-identical, while their envs'
+/// states differ (their logs, which pool every rank's episodes, agree); resumed on both ranks from rank 0's checkpoint, they stay identical; two
 /// ranks as threads of one process end with the same bits.
 #[test]
 fn replicas_stay_identical_while_their_envs_differ() {
@@ -162,10 +164,16 @@ fn replicas_stay_identical_while_their_envs_differ() {
         let logs = orbit_rl::logger::read_scalars(&csv).unwrap();
         logs.iter().map(|l| l.mean_return).collect::<Vec<_>>()
     };
-    assert_ne!(
+    assert!(returns(0).iter().any(Option::is_some));
+    assert_eq!(
         returns(0),
         returns(1),
-        "the ranks' envs gave the same returns"
+        "both ranks log every rank's episodes"
+    );
+    assert_ne!(
+        read(0, "observations"),
+        read(1, "observations"),
+        "the ranks' envs are in the same state"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -2,6 +2,7 @@
 //! `Backends::VULKAN` only, so a missing driver is reported instead of silently falling back to
 //! a GL adapter).
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -72,10 +73,30 @@ pub fn select_gpu(index: usize) -> Result<(), String> {
         .map_err(|_| "the GPU can be chosen once per process".to_string())
 }
 
-/// The process's GPU, created on first use; an error says why none is available.
+thread_local! {
+    /// The calling thread's own device, if it opened one ([`open_device_for_this_thread`]).
+    static THREAD_GPU: RefCell<Option<Arc<Gpu>>> = const { RefCell::new(None) };
+}
+
+/// The GPU of the calling thread: its own device if it opened one, else the process's,
+/// created on first use; an error says why none is available.
 pub fn gpu() -> Result<Arc<Gpu>, String> {
+    if let Some(own) = THREAD_GPU.with(|g| g.borrow().clone()) {
+        return Ok(own);
+    }
     GPU.get_or_init(|| pollster::block_on(create()).map(Arc::new))
         .clone()
+}
+
+/// Opens a device of the calling thread's own, on the adapter the process's would use: the
+/// backends (and a GPU learner) created on this thread afterwards run on it. Data-parallel
+/// ranks that are threads of one process each open one, since a device runs one dispatch at
+/// a time, and a CPU driver (lavapipe) spreads a dispatch over its threads by workgroups: a
+/// rank's few envs would leave most cores idle while the other ranks' dispatches wait.
+pub fn open_device_for_this_thread() -> Result<(), String> {
+    let own = pollster::block_on(create()).map(Arc::new)?;
+    THREAD_GPU.with(|g| *g.borrow_mut() = Some(own));
+    Ok(())
 }
 
 async fn create() -> Result<Gpu, String> {

@@ -9,6 +9,8 @@
 //! the result does not depend on how the engine routes its messages, and every rank computes
 //! the same bits.
 
+use std::collections::BTreeMap;
+
 /// A group of ranks training one policy (implemented on MPI by `orbit-distributed`).
 pub trait Collective {
     /// This process's rank, `0..world_size()`.
@@ -70,6 +72,57 @@ fn gather_bytes(c: &dyn Collective, local: &[u8]) -> Vec<Vec<u8>> {
     gather(c, local, |b| [b], |[b]| b)
 }
 
+/// Every rank's `local` bytes, which may differ in length between ranks, one `Vec` per rank in
+/// rank order.
+fn gather_var_bytes(c: &dyn Collective, local: &[u8]) -> Vec<Vec<u8>> {
+    let lens: Vec<usize> = gather(
+        c,
+        &[local.len() as u64],
+        u64::to_le_bytes,
+        u64::from_le_bytes,
+    )
+    .iter()
+    .map(|l| l[0] as usize)
+    .collect();
+    let mut padded = local.to_vec();
+    padded.resize(lens.iter().copied().max().unwrap_or(0), 0);
+    let mut ranks = gather_bytes(c, &padded);
+    for (bytes, len) in ranks.iter_mut().zip(lens) {
+        bytes.truncate(len);
+    }
+    ranks
+}
+
+/// Named sums and their counts added up over every rank, in rank order (a name missing on a
+/// rank counts nothing there).
+pub(crate) fn sum_named(
+    c: &dyn Collective,
+    local: &BTreeMap<String, (f64, usize)>,
+) -> BTreeMap<String, (f64, usize)> {
+    let mut bytes = Vec::new();
+    for (name, &(sum, count)) in local {
+        bytes.extend((name.len() as u64).to_le_bytes());
+        bytes.extend(name.as_bytes());
+        bytes.extend(sum.to_le_bytes());
+        bytes.extend((count as u64).to_le_bytes());
+    }
+    let word = |b: &[u8], at: usize| -> [u8; 8] { b[at..at + 8].try_into().expect("8 bytes") };
+    let mut all: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    for rank in gather_var_bytes(c, &bytes) {
+        let mut at = 0;
+        while at < rank.len() {
+            let len = u64::from_le_bytes(word(&rank, at)) as usize;
+            let name = String::from_utf8_lossy(&rank[at + 8..at + 8 + len]).into_owned();
+            at += 8 + len;
+            let entry = all.entry(name).or_default();
+            entry.0 += f64::from_le_bytes(word(&rank, at));
+            entry.1 += u64::from_le_bytes(word(&rank, at + 8)) as usize;
+            at += 16;
+        }
+    }
+    all
+}
+
 /// Whether `flag` is set on any rank.
 pub(crate) fn any(c: &dyn Collective, flag: bool) -> bool {
     gather_bytes(c, &[u8::from(flag)]).iter().any(|f| f[0] != 0)
@@ -104,28 +157,87 @@ pub(crate) fn normalize_across(c: &dyn Collective, x: &mut [f32]) {
 pub mod threads {
     //! Ranks as threads of one process, exchanging through shared memory: data-parallel
     //! learners on one machine without a distributed engine (the CPU learner's update is
-    //! split this way over cores), and the learner's unit tests. A rank that stops calling
-    //! leaves the others waiting: end the process when one fails.
+    //! split this way over cores), and the learner's unit tests. A rank that fails calls
+    //! [`ThreadRank::abort`]: the others then unwind out of their next exchange with
+    //! [`GroupAborted`] instead of waiting for it.
 
-    use std::sync::{Arc, Barrier, Mutex};
+    use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 
     use super::Collective;
+
+    /// The panic payload with which a rank leaves an exchange of a group that another rank
+    /// aborted (raised with `resume_unwind`, so no panic message is printed).
+    #[derive(Debug)]
+    pub struct GroupAborted {
+        /// The rank that aborted.
+        pub by: usize,
+    }
+
+    /// What the ranks of a group share.
+    struct Group {
+        size: usize,
+        state: Mutex<Round>,
+        done: Condvar,
+    }
+
+    /// The exchange under way.
+    struct Round {
+        /// Each rank's bytes for this round.
+        slots: Vec<Vec<u8>>,
+        /// Ranks that have put theirs.
+        arrived: usize,
+        /// Rounds completed.
+        completed: u64,
+        /// The last completed round's bytes, in rank order.
+        gathered: Arc<Vec<u8>>,
+        /// The rank that aborted the group.
+        aborted_by: Option<usize>,
+    }
 
     /// One rank of a group of threads.
     pub struct ThreadRank {
         rank: usize,
-        shared: Arc<(Barrier, Mutex<Vec<Vec<u8>>>)>,
+        group: Arc<Group>,
     }
 
     /// `n` ranks; give each to its own thread.
     pub fn group(n: usize) -> Vec<ThreadRank> {
-        let shared = Arc::new((Barrier::new(n), Mutex::new(vec![Vec::new(); n])));
+        let group = Arc::new(Group {
+            size: n,
+            state: Mutex::new(Round {
+                slots: vec![Vec::new(); n],
+                arrived: 0,
+                completed: 0,
+                gathered: Arc::new(Vec::new()),
+                aborted_by: None,
+            }),
+            done: Condvar::new(),
+        });
         (0..n)
             .map(|rank| ThreadRank {
                 rank,
-                shared: shared.clone(),
+                group: group.clone(),
             })
             .collect()
+    }
+
+    impl ThreadRank {
+        /// Ends the group's exchanges: every rank waiting in one, or entering one later,
+        /// unwinds with [`GroupAborted`].
+        pub fn abort(&self) {
+            let mut round = self.lock();
+            round.aborted_by.get_or_insert(self.rank);
+            self.group.done.notify_all();
+        }
+
+        fn lock(&self) -> MutexGuard<'_, Round> {
+            self.group.state.lock().unwrap_or_else(|e| e.into_inner())
+        }
+    }
+
+    /// Leaves the exchange of an aborted group.
+    fn unwind(by: usize) -> ! {
+        std::panic::resume_unwind(Box::new(GroupAborted { by }))
     }
 
     impl Collective for ThreadRank {
@@ -133,20 +245,39 @@ pub mod threads {
             self.rank
         }
         fn world_size(&self) -> usize {
-            self.shared
-                .1
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .len()
+            self.group.size
         }
         fn all_gather(&self, local: &[u8], out: &mut [u8]) {
-            let (barrier, slots) = &*self.shared;
-            slots.lock().unwrap_or_else(|e| e.into_inner())[self.rank] = local.to_vec();
-            barrier.wait();
-            let all: Vec<u8> = slots.lock().unwrap_or_else(|e| e.into_inner()).concat();
-            out.copy_from_slice(&all);
-            // Nobody writes the next round's slot before everyone has read this one.
-            barrier.wait();
+            let mut round = self.lock();
+            if let Some(by) = round.aborted_by {
+                drop(round);
+                unwind(by);
+            }
+            round.slots[self.rank] = local.to_vec();
+            round.arrived += 1;
+            let this_round = round.completed;
+            if round.arrived == self.group.size {
+                // The last to arrive completes the round; a rank's next round's bytes go to
+                // the slots only after it has left this one.
+                round.gathered = Arc::new(round.slots.concat());
+                round.arrived = 0;
+                round.completed += 1;
+                self.group.done.notify_all();
+            }
+            while round.completed == this_round {
+                if let Some(by) = round.aborted_by {
+                    drop(round);
+                    unwind(by);
+                }
+                round = self
+                    .group
+                    .done
+                    .wait(round)
+                    .unwrap_or_else(|e| e.into_inner());
+            }
+            let gathered = round.gathered.clone();
+            drop(round);
+            out.copy_from_slice(&gathered);
         }
     }
 }
@@ -224,5 +355,58 @@ mod tests {
             assert_eq!(mean, vec![1.0, 1.5]);
             assert_eq!(root, vec![0.0, 1.0]);
         }
+    }
+
+    /// Named sums add up over ranks that logged different names, and every rank gets the same
+    /// totals.
+    #[test]
+    fn named_sums_add_up_over_ranks_with_different_names() {
+        let results: Vec<BTreeMap<String, (f64, usize)>> = std::thread::scope(|s| {
+            let handles: Vec<_> = group(3)
+                .into_iter()
+                .map(|rank| {
+                    s.spawn(move || {
+                        let r = rank.rank();
+                        let mut local = BTreeMap::from([("success".to_string(), (r as f64, 2))]);
+                        if r == 1 {
+                            local.insert("Episode_Reward/a_longer_name".into(), (2.5, 1));
+                        }
+                        sum_named(&rank, &local)
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        let expected = BTreeMap::from([
+            ("Episode_Reward/a_longer_name".to_string(), (2.5, 1)),
+            ("success".to_string(), (3.0, 6)),
+        ]);
+        for r in results {
+            assert_eq!(r, expected);
+        }
+    }
+
+    /// A rank's abort wakes the ranks waiting in an exchange, and each leaves it with
+    /// `GroupAborted` naming the rank that aborted.
+    #[test]
+    fn an_abort_releases_the_waiting_ranks() {
+        let mut ranks = group(3).into_iter();
+        let aborting = ranks.next().unwrap();
+        let outcomes: Vec<Option<usize>> = std::thread::scope(|s| {
+            let waiting: Vec<_> = ranks
+                .map(|rank| {
+                    s.spawn(move || {
+                        let r = std::panic::catch_unwind(|| any(&rank, true));
+                        r.err()
+                            .and_then(|p| p.downcast::<threads::GroupAborted>().ok())
+                            .map(|a| a.by)
+                    })
+                })
+                .collect();
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            aborting.abort();
+            waiting.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(outcomes, vec![Some(0), Some(0)]);
     }
 }

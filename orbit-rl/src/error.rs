@@ -59,6 +59,20 @@ pub enum RlError {
         /// What went wrong.
         message: String,
     },
+    /// A rank of a data-parallel run failed; the others stopped with it.
+    #[error("rank {rank}: {message}")]
+    RankFailed {
+        /// The rank that failed.
+        rank: usize,
+        /// What went wrong there.
+        message: String,
+    },
+    /// This rank of a data-parallel run stopped because rank `by` failed.
+    #[error("stopped: rank {by} failed")]
+    RankStopped {
+        /// The rank that failed.
+        by: usize,
+    },
     /// The learner's device could not be opened.
     #[error("learner device: {0}")]
     Device(String),

@@ -19,6 +19,11 @@ use burn::module::Module;
 use burn::tensor::Device;
 use orbit_envs::VecEnv;
 
+/// `sum / count`, if anything was counted.
+fn mean((sum, count): (f64, usize)) -> Option<f32> {
+    (count > 0).then(|| (sum / count as f64) as f32)
+}
+
 /// Rows after which the observation statistics freeze (RSL-RL's `until`).
 const NORMALIZER_UNTIL: u64 = 100_000_000;
 
@@ -36,11 +41,13 @@ pub struct IterationLog {
     /// Wall-clock seconds since training started (collection + learning, summed over
     /// iterations of this and resumed runs).
     pub wall_time: f64,
-    /// Mean undiscounted return of the last ≤ 100 completed episodes.
+    /// Mean undiscounted return of the last ≤ 100 completed episodes (of each rank, in a
+    /// data-parallel run).
     pub mean_return: Option<f32>,
-    /// Mean length (steps) of the last ≤ 100 completed episodes.
+    /// Mean length (steps) of the last ≤ 100 completed episodes (of each rank).
     pub mean_episode_length: Option<f32>,
-    /// Mean of the runner config's `success_metric` over this iteration's finished episodes.
+    /// Mean of the runner config's `success_metric` over this iteration's finished episodes
+    /// (every rank's).
     pub success_rate: Option<f32>,
     /// PPO losses.
     pub losses: LossStats,
@@ -342,16 +349,15 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let learning_time = learn_start.elapsed().as_secs_f64();
             self.env_steps += interactions;
             self.wall_time += collection_time + learning_time;
-            let mean =
-                |q: &VecDeque<f32>| (!q.is_empty()).then(|| q.iter().sum::<f32>() / q.len() as f32);
+            let (success, episode, returns, lengths) = self.pooled(success, episode);
             let noise = values(self.alg.model.action_std());
             let log = IterationLog {
                 iteration: it,
                 env_steps: self.env_steps,
                 wall_time: self.wall_time,
-                mean_return: mean(&self.returns),
-                mean_episode_length: mean(&self.lengths),
-                success_rate: (success.1 > 0).then(|| (success.0 / success.1 as f64) as f32),
+                mean_return: mean(returns),
+                mean_episode_length: mean(lengths),
+                success_rate: mean(success),
                 losses,
                 learning_rate: self.alg.learning_rate(),
                 mean_noise_std: noise.iter().sum::<f32>() / noise.len() as f32,
@@ -363,7 +369,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 learning_time,
                 episode: episode
                     .into_iter()
-                    .map(|(k, (s, c))| (k, (s / c as f64) as f32))
+                    .filter_map(|(k, sum)| Some((k, mean(sum)?)))
                     .collect(),
             };
             if let Some(s) = &mut self.scalars {
@@ -384,6 +390,36 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             p.finish();
         }
         Ok(())
+    }
+
+    /// This iteration's success and episode-term sums with their counts, and the episode
+    /// window's return and length sums with theirs: this runner's, or in a data-parallel run
+    /// every rank's added up, so that the log describes all envs.
+    #[allow(clippy::type_complexity)]
+    fn pooled(
+        &self,
+        success: (f64, usize),
+        mut episode: BTreeMap<String, (f64, usize)>,
+    ) -> (
+        (f64, usize),
+        BTreeMap<String, (f64, usize)>,
+        (f64, usize),
+        (f64, usize),
+    ) {
+        let window = |q: &VecDeque<f32>| (q.iter().map(|&v| f64::from(v)).sum(), q.len());
+        // Names no logged term has (a term name is printable).
+        const SUCCESS: &str = "\0success";
+        const RETURNS: &str = "\0returns";
+        const LENGTHS: &str = "\0lengths";
+        episode.insert(SUCCESS.into(), success);
+        episode.insert(RETURNS.into(), window(&self.returns));
+        episode.insert(LENGTHS.into(), window(&self.lengths));
+        if let Some(c) = self.alg.collective() {
+            episode = collective::sum_named(c, &episode);
+        }
+        let mut take = |name| episode.remove(name).unwrap_or_default();
+        let (success, returns, lengths) = (take(SUCCESS), take(RETURNS), take(LENGTHS));
+        (success, episode, returns, lengths)
     }
 
     /// Whether [`stop`](Self::stop) was set (on any rank of a data-parallel run).
