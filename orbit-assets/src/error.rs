@@ -166,6 +166,33 @@ pub enum AssetError {
         /// What is wrong and what is expected.
         problem: String,
     },
+    /// An MJCF file that is not well-formed XML.
+    #[error("{file}:{line}: not well-formed XML: {message}")]
+    MjcfSyntax {
+        /// File name.
+        file: String,
+        /// Line of the problem (1-based).
+        line: usize,
+        /// The XML parser's message.
+        message: String,
+    },
+    /// An MJCF element or attribute that is malformed, out of range or not supported.
+    #[error(
+        "{file}:{line}: <{element}>{}: {message}",
+        attribute.as_ref().map_or(String::new(), |a| format!(" attribute `{a}`"))
+    )]
+    Mjcf {
+        /// File name.
+        file: String,
+        /// Line of the element (1-based).
+        line: usize,
+        /// The element's name.
+        element: String,
+        /// The attribute, if one is at fault.
+        attribute: Option<String>,
+        /// What is wrong and what is expected.
+        message: String,
+    },
     /// The imported model failed [`orbit_core::scene::ArticulationModel::validate`].
     #[error("{file}: {source}")]
     Model {

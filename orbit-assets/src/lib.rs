@@ -4,6 +4,9 @@
 //! - [`model_from_urdf_str`] / [`model_from_urdf_file`]: URDF import (revolute, continuous,
 //!   prismatic and fixed joints; primitive collision shapes; full inertia tensors). Every
 //!   problem in a file is reported as an [`AssetError`] naming the file and the element.
+//! - [`model_from_mjcf_str`] / [`model_from_mjcf_file`]: MJCF import for the subset the
+//!   classic locomotion models use (hinge, slide and free joints, primitive geoms, default
+//!   classes, motors), into an articulation with a fixed or floating base.
 //! - [`asset_cfg`] / [`AssetCfgDef`]: asset configs registered by name (Isaac Lab's
 //!   `FRANKA_PANDA_CFG`): `franka_panda_rod`, `push_box`, `lab_table`, `franka_mount`; scenes
 //!   compose them by name ([`compose_scene`]).
@@ -21,6 +24,7 @@ mod asset_cfg;
 mod bundled;
 mod compose;
 mod error;
+mod mjcf;
 mod urdf;
 
 pub use asset_cfg::{AssetCfgDef, AssetKind, asset_cfg, asset_cfgs};
@@ -31,6 +35,7 @@ pub use bundled::{
 pub use compose::{compose_env_scene, compose_scene};
 pub use error::AssetError;
 pub use inventory;
+pub use mjcf::{MjcfActuator, MjcfModel, model_from_mjcf_file, model_from_mjcf_str};
 pub use urdf::{
     UrdfOptions, model_from_urdf_file, model_from_urdf_file_with, model_from_urdf_str,
     model_from_urdf_str_with,
