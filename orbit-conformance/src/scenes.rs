@@ -4,8 +4,8 @@ use glam::{Mat3, Vec3};
 use orbit_core::math::Pose;
 use orbit_core::physics::{PhysicsBackend, SimCfg, build_backend};
 use orbit_core::scene::{
-    ArticulationCfg, ArticulationModel, AssetSource, Geometry, Inertial, Joint, Link, Material,
-    RigidObjectCfg, RootStateCfg, SceneCfg, SceneDesc, Shape, StaticObjectCfg,
+    ArticulationCfg, ArticulationModel, AssetSource, Geometry, Inertial, Joint, JointKind, Link,
+    Material, RigidObjectCfg, RootStateCfg, SceneCfg, SceneDesc, Shape, StaticObjectCfg,
 };
 
 /// Resolves a scene config whose models are inline or bundled assets.
@@ -122,6 +122,39 @@ pub fn pendulum(mass: f32, length: f32, radius: f32, pivot_z: f32) -> Articulati
             },
         ],
     }
+}
+
+/// A pendulum on a cart: a massless rail, a cart of mass `cart_mass` on a prismatic joint along
+/// x (`slider`), and below it the [`pendulum`]'s bob on a revolute joint about y (`hinge`).
+pub fn cart_pendulum(
+    cart_mass: f32,
+    mass: f32,
+    length: f32,
+    radius: f32,
+    rail_z: f32,
+) -> ArticulationModel {
+    let mut model = pendulum(mass, length, radius, 0.0);
+    model.name = "cart_pendulum".into();
+    let cart = Link {
+        name: "cart".into(),
+        parent: Some(0),
+        joint: Some(Joint {
+            kind: JointKind::Prismatic,
+            axis: Vec3::X,
+            ..Joint::fixed("slider", Pose::from_pos(Vec3::new(0.0, 0.0, rail_z)))
+        }),
+        inertial: Inertial {
+            mass: cart_mass,
+            com: Vec3::ZERO,
+            inertia: Mat3::from_diagonal(Vec3::splat(0.01 * cart_mass)),
+        },
+        shapes: vec![],
+        frames: vec![],
+    };
+    model.links[0].name = "rail".into();
+    model.links[1].parent = Some(1);
+    model.links.insert(1, cart);
+    model
 }
 
 /// An articulation config around an inline model with no actuators.

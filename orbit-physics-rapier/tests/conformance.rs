@@ -13,6 +13,11 @@ fn pendulum_period() {
 }
 
 #[test]
+fn cart_pendulum_period() {
+    orbit_conformance::cart_pendulum_period(BACKEND_NAME);
+}
+
+#[test]
 fn box_rests_on_table() {
     orbit_conformance::box_rests_on_table(BACKEND_NAME);
 }

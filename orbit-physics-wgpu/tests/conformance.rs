@@ -20,6 +20,13 @@ fn pendulum_period() {
 }
 
 #[test]
+fn cart_pendulum_period() {
+    if gpu_available() {
+        orbit_conformance::cart_pendulum_period(BACKEND_NAME);
+    }
+}
+
+#[test]
 fn box_rests_on_table() {
     if gpu_available() {
         orbit_conformance::box_rests_on_table(BACKEND_NAME);
