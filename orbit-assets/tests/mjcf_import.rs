@@ -1,7 +1,7 @@
-//! MJCF import against MuJoCo: the shipped Ant model's masses, inertias and forward kinematics
-//! agree with MuJoCo's compiled model (`tests/data/ant_mujoco_reference.json`, written by
-//! `tools/mjcf_reference.py`), and malformed documents are errors naming element, attribute and
-//! line.
+//! MJCF import against MuJoCo: the shipped Ant model's and a several-joint body's masses,
+//! inertias and forward kinematics agree with MuJoCo's compiled models
+//! (`tests/data/*_mujoco_reference.json`, written by `tools/mjcf_reference.py`), and malformed
+//! documents are errors naming element, attribute and line.
 
 use std::path::Path;
 
@@ -12,13 +12,16 @@ use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
 use orbit_core::scene::Geometry;
 use serde_json::Value;
 
-fn ant() -> MjcfModel {
-    model_from_mjcf_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/ant.xml")).unwrap()
+fn data(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(name)
 }
 
-fn reference() -> Value {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ant_mujoco_reference.json");
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+fn ant() -> MjcfModel {
+    model_from_mjcf_file(&data("assets/ant.xml")).unwrap()
+}
+
+fn reference(name: &str) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(data(name)).unwrap()).unwrap()
 }
 
 fn f32s(v: &Value) -> Vec<f32> {
@@ -38,28 +41,23 @@ fn quat(v: &Value) -> Quat {
     quat_wxyz([q[0], q[1], q[2], q[3]])
 }
 
-/// Every body's mass (relative 1e-6), centre of mass (1e-7 m) and inertia tensor about it
-/// (1e-6 of its largest entry) equal MuJoCo's, which computes them from the capsules and the
-/// sphere at density 5.
-#[test]
-fn ant_masses_and_inertias_match_mujoco() {
-    let (model, reference) = (ant(), reference());
-    let bodies = reference["bodies"].as_object().unwrap();
-    assert_eq!(model.articulation.links.len(), bodies.len());
-    for link in &model.articulation.links {
-        let want = &bodies[&link.name];
+/// Every MuJoCo body of `reference` against the imported `model`: its mass (relative 1e-6) and
+/// inertia tensor about its centre (1e-6 of its largest entry; a link has its body's axes),
+/// and its world pose and centre of mass (1e-5 m, 1e-5 rad) at the reference configuration and
+/// at the moved one.
+fn check_against_mujoco(model: &MjcfModel, reference: &Value) {
+    let articulation = &model.articulation;
+    let link = |name: &str| {
+        let i = articulation.link_index(name);
+        i.unwrap_or_else(|| panic!("no link `{name}`"))
+    };
+    for (name, want) in reference["bodies"].as_object().unwrap() {
+        let inertial = &articulation.links[link(name)].inertial;
         let mass = want["mass"].as_f64().unwrap() as f32;
         assert!(
-            (link.inertial.mass - mass).abs() <= 1e-6 * mass,
-            "{}: mass {} against {mass}",
-            link.name,
-            link.inertial.mass
-        );
-        let com_err = (link.inertial.com - vec3(&want["com"])).length();
-        assert!(
-            com_err < 1e-7,
-            "{}: centre of mass off by {com_err}",
-            link.name
+            (inertial.mass - mass).abs() <= 1e-6 * mass,
+            "{name}: mass {} against {mass}",
+            inertial.mass
         );
         let rows: Vec<Vec<f32>> = want["inertia"]
             .as_array()
@@ -70,31 +68,23 @@ fn ant_masses_and_inertias_match_mujoco() {
         let scale = rows.iter().flatten().fold(0.0f32, |m, v| m.max(v.abs()));
         for (r, row) in rows.iter().enumerate() {
             for (c, &v) in row.iter().enumerate() {
-                let got = link.inertial.inertia.col(c)[r];
+                let got = inertial.inertia.col(c)[r];
                 assert!(
                     (got - v).abs() <= 1e-6 * scale,
-                    "{}: inertia[{r}][{c}] {got} against {v}",
-                    link.name
+                    "{name}: inertia[{r}][{c}] {got} against {v}"
                 );
             }
         }
     }
-}
-
-/// Every body's world pose equals MuJoCo's (1e-5 m, 1e-5 rad) at the reference configuration
-/// and at a configuration with the free joint moved and turned and every hinge in its range.
-#[test]
-fn ant_forward_kinematics_matches_mujoco() {
-    let (model, reference) = (ant(), reference());
-    let articulation = &model.articulation;
     let mut kin = ArticulationKinematics::new(articulation);
     let moved = &reference["moved"];
-    let q: Vec<f32> = articulation
-        .joint_names()
-        .iter()
+    let q: Vec<f32> = (articulation.joint_names().iter())
         .map(|j| moved["joints"][j].as_f64().unwrap() as f32)
         .collect();
-    let root = Pose::new(vec3(&moved["root"]["pos"]), quat(&moved["root"]["quat"]));
+    let root = match moved["root"].is_null() {
+        true => model.root_pose,
+        false => Pose::new(vec3(&moved["root"]["pos"]), quat(&moved["root"]["quat"])),
+    };
     let cases = [
         (
             model.root_pose,
@@ -105,18 +95,46 @@ fn ant_forward_kinematics_matches_mujoco() {
     ];
     for (root, q, poses) in cases {
         let links = kin.forward(&root, &q).to_vec();
-        for (link, pose) in articulation.links.iter().zip(links) {
-            let want = &poses[&link.name];
-            let pos_err = (pose.pos - vec3(&want["pos"])).length();
+        for (name, want) in poses.as_object().unwrap() {
+            let i = link(name);
+            let pose = links[i];
+            let com = pose.transform_point(articulation.links[i].inertial.com);
+            let com_err = (com - vec3(&want["com"])).length();
             let rot_err = rotation_distance(pose.rot, quat(&want["quat"]));
-            assert!(pos_err < 1e-5, "{}: position off by {pos_err} m", link.name);
-            assert!(
-                rot_err < 1e-5,
-                "{}: orientation off by {rot_err} rad",
-                link.name
-            );
+            assert!(com_err < 1e-5, "{name}: centre of mass off by {com_err} m");
+            assert!(rot_err < 1e-5, "{name}: orientation off by {rot_err} rad");
         }
     }
+}
+
+/// The Ant's bodies agree with MuJoCo's compiled model: masses and inertias computed from the
+/// capsules and the sphere at density 5, poses with the free joint moved and turned and every
+/// hinge in its range.
+#[test]
+fn ant_matches_mujoco() {
+    let model = ant();
+    let reference = reference("tests/data/ant_mujoco_reference.json");
+    assert_eq!(
+        model.articulation.links.len(),
+        reference["bodies"].as_object().unwrap().len()
+    );
+    check_against_mujoco(&model, &reference);
+}
+
+/// A body moved by three joints (two hinges at different points, then a slide) and a child
+/// on an offset hinge agree with MuJoCo, which composes a body's joints in file order.
+#[test]
+fn bodies_with_several_joints_match_mujoco() {
+    let model = model_from_mjcf_file(&data("tests/data/multi_joint.xml")).unwrap();
+    assert!(!model.floating_base);
+    assert_eq!(
+        model.articulation.joint_names(),
+        ["swing", "lift", "reach", "elbow"]
+    );
+    check_against_mujoco(
+        &model,
+        &reference("tests/data/multi_joint_mujoco_reference.json"),
+    );
 }
 
 /// The Ant's floating base, joints, motors and contacts as the file declares them: hinge
@@ -199,8 +217,10 @@ fn malformed_documents_name_line_element_and_attribute() {
             "test.xml:7: <joint> attribute `range`: the lower end 30 is above the upper end 10",
         ),
         (
-            body("<joint/><joint/><geom size=\"0.1\"/>"),
-            "test.xml:7: <joint>: body `c` has 2 joints",
+            "<mujoco>\n<worldbody>\n<body>\n<freejoint/>\n<joint/>\n<geom size=\"1\"/>\n</body>\n\
+             </worldbody>\n</mujoco>"
+                .to_string(),
+            "test.xml:4: <freejoint>: body `body0`: a free joint must be the body's only joint",
         ),
         (
             body("<freejoint/><geom size=\"0.1\"/>"),

@@ -6,10 +6,13 @@ Usage (from the workspace root):
 
     python3 orbit-assets/tools/mjcf_reference.py orbit-assets/assets/ant.xml \
         > orbit-assets/tests/data/ant_mujoco_reference.json
+    python3 orbit-assets/tools/mjcf_reference.py orbit-assets/tests/data/multi_joint.xml \
+        > orbit-assets/tests/data/multi_joint_mujoco_reference.json
 
 Needs `pip install mujoco numpy`. For every body but the world: its mass, its inertia tensor
 about its centre of mass in the body frame (MuJoCo's principal moments rotated by `body_iquat`),
-its centre of mass in the body frame, and its world position and orientation (wxyz) at the
+its centre of mass in the body frame, and its world position, orientation (wxyz) and centre of
+mass at the
 model's reference configuration and at one configuration drawn with a fixed seed (the free
 joint moved and turned, every hinge or slide within its range).
 """
@@ -30,7 +33,11 @@ def quat_to_matrix(q):
 def poses(model, data):
     mujoco.mj_kinematics(model, data)
     return {
-        model.body(b).name: {"pos": data.xpos[b].tolist(), "quat": data.xquat[b].tolist()}
+        model.body(b).name: {
+            "pos": data.xpos[b].tolist(),
+            "quat": data.xquat[b].tolist(),
+            "com": data.xipos[b].tolist(),
+        }
         for b in range(1, model.nbody)
     }
 

@@ -1,8 +1,9 @@
 //! MJCF import (MuJoCo's XML format) for the subset the classic locomotion models use:
 //! bodies with positions and orientations (`quat`, `euler` in the `xyz` sequence, `axisangle`,
 //! `zaxis`), `<inertial>` or inertia from the geoms (`<compiler inertiafromgeom>`, density or
-//! `mass`), one `hinge` or `slide` joint per body (range, limits, armature, damping,
-//! frictionloss) or a `free` joint on the top-level body (a floating base), geoms (`sphere`,
+//! `mass`), `hinge` and `slide` joints (range, limits, armature, damping, frictionloss; several
+//! in one body become a chain of massless links, composed in file order as MuJoCo does) or a
+//! `free` joint on the top-level body (a floating base), geoms (`sphere`,
 //! `capsule`, `box`, `cylinder`, with `fromto`; `plane` in the world body), `<default>`
 //! classes with `class`/`childclass`, `contype`/`conaffinity`, sites, `<motor>` actuators and
 //! `<contact><exclude>`. Angles are in degrees unless `<compiler angle="radian">`.
@@ -322,45 +323,61 @@ impl<'a> Importer<'a> {
     ) -> Result<(), AssetError> {
         let a = self.defaults.attrs(self.file, element, childclass)?;
         let class = a.text("childclass").unwrap_or(childclass).to_string();
-        let body_pose = self.pose(&a)?;
+        let mut body_pose = self.pose(&a)?;
         let name = a
             .text("name")
             .map_or_else(|| format!("body{}", self.links.len()), str::to_string);
         let joint_elements: Vec<&Element> = (element.children.iter())
             .filter(|c| c.name == "joint" || c.name == "freejoint")
             .collect();
-        if joint_elements.len() > 1 {
-            return Err(self.unsupported(
-                joint_elements[1],
-                &format!(
-                    "body `{name}` has {} joints; the importer takes one joint per body",
-                    joint_elements.len()
-                ),
-            ));
+        let mut joints = Vec::new();
+        for j in &joint_elements {
+            if joint_elements.len() > 1 && j.name == "freejoint" {
+                return Err(self.unsupported(
+                    j,
+                    &format!("body `{name}`: a free joint must be the body's only joint"),
+                ));
+            }
+            if let (Some(joint), pos) = self.joint(j, &class, parent.is_none(), &name)? {
+                joints.push((joint, pos));
+            }
         }
-        let (joint, offset) = match joint_elements.first() {
-            Some(j) => self.joint(j, &class, parent.is_none(), &name)?,
-            None => (None, Vec3::ZERO),
-        };
-        // The link frame: the body frame moved to the joint.
+        let (mut parent, mut to_parent) = (parent, Pose::from_pos(-parent_offset));
+        if parent.is_none() {
+            self.root_pose = body_pose;
+        }
+        // MuJoCo composes a body's joints in file order: every joint but the last moves a
+        // massless link of its own, each link frame at its joint with the body's orientation.
+        let last = joints.pop();
+        for (mut joint, pos) in joints {
+            joint.origin = to_parent
+                .mul_pose(&body_pose)
+                .mul_pose(&Pose::from_pos(pos));
+            self.links.push(Link {
+                name: format!("{name}_{}", joint.name),
+                parent,
+                joint: Some(joint),
+                inertial: Inertial::ZERO,
+                shapes: Vec::new(),
+                frames: Vec::new(),
+            });
+            self.link_classes.push(Vec::new());
+            parent = Some(self.links.len() - 1);
+            (to_parent, body_pose) = (Pose::from_pos(-pos), Pose::default());
+        }
+        let offset = last.as_ref().map_or(Vec3::ZERO, |(_, pos)| *pos);
+        // The link frame: the body frame moved to the (last) joint.
         let to_link = Pose::from_pos(-offset);
-        let link_pose = body_pose.mul_pose(&Pose::from_pos(offset));
-        let joint = match parent {
-            None => {
-                self.root_pose = link_pose;
-                None
+        let origin = to_parent
+            .mul_pose(&body_pose)
+            .mul_pose(&Pose::from_pos(offset));
+        let joint = parent.map(|_| match last {
+            Some((mut j, _)) => {
+                j.origin = origin;
+                j
             }
-            Some(_) => {
-                let origin = Pose::from_pos(-parent_offset).mul_pose(&link_pose);
-                Some(match joint {
-                    Some(mut j) => {
-                        j.origin = origin;
-                        j
-                    }
-                    None => Joint::fixed(format!("{name}_weld"), origin),
-                })
-            }
-        };
+            None => Joint::fixed(format!("{name}_weld"), origin),
+        });
         let mut shapes = Vec::new();
         let mut classes = Vec::new();
         let mut from_geoms = Inertial::ZERO;
