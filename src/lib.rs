@@ -17,6 +17,7 @@ pub use orbit_render as render;
 pub use orbit_rl as rl;
 pub use orbit_task_box_pushing as task_box_pushing;
 pub use orbit_task_box_to_spot as task_box_to_spot;
+pub use orbit_task_cartpole as task_cartpole;
 pub use orbit_task_reach as task_reach;
 
 /// Builds a registered task (`BoxPushing-Torque-Franka-v0`, …) with config overrides; linking
@@ -69,6 +70,7 @@ pub fn link_registrations() {
         task_box_pushing::SUCCESS_DISTANCE,
         std::mem::size_of::<task_box_to_spot::ObjectPointParams>(),
         task_reach::TASK_ID,
+        task_cartpole::TASK_ID,
     );
 }
 

@@ -102,3 +102,13 @@ inventory::submit! {
         config: include_str!("../assets/franka_mount.ron"),
     }
 }
+
+inventory::submit! {
+    AssetCfgDef {
+        name: "cartpole",
+        kind: AssetKind::Articulation,
+        description: "the cart-pole of Isaac Lab's Isaac-Cartpole-v0: a cart on an 8 m rail, a 1 m pole, both effort-driven",
+        file: "assets/cartpole.ron",
+        config: include_str!("../assets/cartpole.ron"),
+    }
+}

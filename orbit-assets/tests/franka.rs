@@ -311,7 +311,13 @@ fn bundled_scene_is_composed_of_the_asset_configs() {
     let names: Vec<&str> = asset_cfgs().iter().map(|a| a.name).collect();
     assert_eq!(
         names,
-        ["franka_mount", "franka_panda_rod", "lab_table", "push_box"]
+        [
+            "cartpole",
+            "franka_mount",
+            "franka_panda_rod",
+            "lab_table",
+            "push_box"
+        ]
     );
     let changed =
         box_pushing_scene_cfg(&["articulations[0].actuators.arm.stiffness=400.0".into()]).unwrap();

@@ -65,12 +65,18 @@ pub struct EnvView<'a> {
     pub step_dt: f32,
     /// Env steps since construction.
     pub common_step_counter: u64,
+    /// Per env, whether this step's termination terms (not time-outs) ended its episode; empty
+    /// before the terminations are computed (reward terms see them, as in Isaac Lab).
+    pub terminated: &'a [bool],
 }
 
 /// The terms' view of a base env, borrowing only the fields it names (so a manager of the RL env
 /// can be borrowed mutably at the same time).
 macro_rules! view {
     ($env:expr) => {
+        view!($env, &[])
+    };
+    ($env:expr, $terminated:expr) => {
         EnvView {
             scene: &$env.scene,
             action: &$env.actions.action,
@@ -82,6 +88,7 @@ macro_rules! view {
             max_episode_length: $env.max_episode_length,
             step_dt: $env.step_dt,
             common_step_counter: $env.common_step_counter,
+            terminated: $terminated,
         }
     };
 }

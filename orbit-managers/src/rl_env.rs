@@ -230,7 +230,7 @@ impl ManagerBasedRlEnv {
         }
         {
             let base = &self.base;
-            let view = view!(base);
+            let view = view!(base, &self.terminated);
             self.rewards.compute(&view, base.step_dt, &mut self.reward);
         }
         lap(&mut self.base.timings.rewards, &mut clock);

@@ -122,8 +122,10 @@ impl Default for ResetJointsParams {
     }
 }
 
-/// `reset_joints_by_offset` / `_by_scale`: default joint state plus (or times) uniform noise,
-/// positions clamped to the joint limits; unselected joints get their defaults.
+/// `reset_joints_by_offset` / `_by_scale`: the selected joints' default state plus (or times)
+/// uniform noise, positions clamped to the joint limits; unselected joints keep their state
+/// (as in Isaac Lab, which writes the selected joints only), so two such events can reset two
+/// joints with ranges of their own.
 struct ResetJoints {
     sel: JointSel,
     p: ResetJointsParams,
@@ -140,11 +142,18 @@ impl EventTerm for ResetJoints {
     ) -> Result<(), EnvError> {
         let desc = &scene.desc.articulations[self.sel.articulation];
         let n = self.sel.num_dofs;
-        let mut pos = desc.default_joint_pos.repeat(env_ids.len());
-        let mut vel = desc.default_joint_vel.repeat(env_ids.len());
+        let state = scene.backend.articulation(self.sel.articulation);
+        let rows = |x: &[f32]| -> Vec<f32> {
+            (env_ids.iter())
+                .flat_map(|&e| x[e * n..(e + 1) * n].iter().copied())
+                .collect()
+        };
+        let (mut pos, mut vel) = (rows(state.joint_pos), rows(state.joint_vel));
         for (i, &e) in env_ids.iter().enumerate() {
             let r = rng.get(e);
             for &j in &self.sel.dofs {
+                pos[i * n + j] = desc.default_joint_pos[j];
+                vel[i * n + j] = desc.default_joint_vel[j];
                 let (dp, dv) = (
                     r.uniform_range(self.p.position_range.0, self.p.position_range.1),
                     r.uniform_range(self.p.velocity_range.0, self.p.velocity_range.1),

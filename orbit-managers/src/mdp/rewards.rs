@@ -1,4 +1,4 @@
-//! Reward terms: action rate, joint speed, joint limits.
+//! Reward terms: action rate, joint speed, joint limits, alive and terminated, joint targets.
 use super::*;
 
 /// `action_rate_l2`: `Σ (a − a_prev)²`.
@@ -141,3 +141,136 @@ inventory::submit! { RewardTermDef { name: "joint_vel_limits", build: |c| {
     }
     Ok(Box::new(JointVelLimits { sel, soft_limits }))
 } } }
+
+/// `is_alive`: 1 for an env whose episode no termination term ended this step (a time-out
+/// counts as alive), as Isaac Lab's.
+struct IsAlive;
+
+impl RewardTerm for IsAlive {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        for (e, o) in out.iter_mut().enumerate() {
+            *o = if terminated(env, e) { 0.0 } else { 1.0 };
+        }
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "is_alive", build: |_| Ok(Box::new(IsAlive)) } }
+
+/// `is_terminated`: 1 for an env whose episode a termination term (not a time-out) ended this
+/// step, as Isaac Lab's.
+struct IsTerminated;
+
+impl RewardTerm for IsTerminated {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        for (e, o) in out.iter_mut().enumerate() {
+            *o = if terminated(env, e) { 1.0 } else { 0.0 };
+        }
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "is_terminated", build: |_| Ok(Box::new(IsTerminated)) } }
+
+/// Whether env `e`'s episode was terminated (not timed out) this step.
+fn terminated(env: &EnvView<'_>, e: usize) -> bool {
+    env.terminated.get(e).copied().unwrap_or(false)
+}
+
+/// Parameters of `joint_pos_target_l2`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointTargetParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub asset: String,
+    /// Joint-name regexes (full match).
+    #[serde(default = "all_joints")]
+    pub joint_names: Vec<String>,
+    /// The target position (rad or m).
+    pub target: f32,
+}
+
+impl Default for JointTargetParams {
+    /// No target: the term's builder asks for one.
+    fn default() -> Self {
+        Self {
+            asset: robot(),
+            joint_names: all_joints(),
+            target: f32::NAN,
+        }
+    }
+}
+
+/// `joint_pos_target_l2`: `Σ (wrap(q) − target)²` over the selected joints, each position
+/// wrapped to `(−π, π]` first (Isaac Lab's, for continuous joints such as a cart-pole's).
+struct JointPosTargetL2 {
+    sel: JointSel,
+    target: f32,
+}
+
+impl RewardTerm for JointPosTargetL2 {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let q = env
+            .scene
+            .backend
+            .articulation(self.sel.articulation)
+            .joint_pos;
+        let target = self.target;
+        self.sel
+            .sum_per_env(q, out, |_, q| (wrap_to_pi(q) - target).powi(2));
+    }
+}
+
+/// `a` wrapped to `(−π, π]`.
+fn wrap_to_pi(a: f32) -> f32 {
+    use std::f32::consts::{PI, TAU};
+    let w = (a + PI).rem_euclid(TAU) - PI;
+    if w == -PI { PI } else { w }
+}
+
+inventory::submit! { RewardTermDef { name: "joint_pos_target_l2", build: |c| {
+    let p: JointTargetParams = c.params()?;
+    if !p.target.is_finite() {
+        return Err(c.error(format!(
+            "params.target (the joint position to reach) must be given and finite, got {}",
+            p.target
+        )));
+    }
+    let sel = JointSel::resolve(c, &JointsParams { asset: p.asset, joint_names: p.joint_names })?;
+    Ok(Box::new(JointPosTargetL2 { sel, target: p.target }))
+} } }
+
+/// `joint_vel_l1`: `Σ |q̇|` over the selected joints.
+struct JointVelL1(JointSel);
+
+impl RewardTerm for JointVelL1 {
+    fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        let v = env
+            .scene
+            .backend
+            .articulation(self.0.articulation)
+            .joint_vel;
+        self.0.sum_per_env(v, out, |_, qd| qd.abs());
+    }
+}
+
+inventory::submit! { RewardTermDef { name: "joint_vel_l1", build: |c| Ok(Box::new(JointVelL1(JointSel::resolve(c, &c.params()?)?))) } }
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_to_pi;
+    use std::f32::consts::PI;
+
+    /// Angles wrap into (−π, π] and keep their value modulo 2π.
+    #[test]
+    fn angles_wrap_into_one_turn() {
+        for (a, w) in [
+            (0.0, 0.0),
+            (PI, PI),
+            (-PI, PI),
+            (3.0 * PI / 2.0, -PI / 2.0),
+            (-7.0, -7.0 + 2.0 * PI),
+        ] {
+            assert!((wrap_to_pi(a) - w).abs() < 1e-5, "{a} -> {}", wrap_to_pi(a));
+        }
+    }
+}
