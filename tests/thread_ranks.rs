@@ -99,3 +99,34 @@ fn thread_ranks_and_mpi_ranks_exclude_each_other() {
     assert!(!root.exists());
     assert!(TrainArgs::try_parse_from(["train", "--ranks", "0"]).is_err());
 }
+
+/// Thread ranks on the GPU backend each open a device of their own and end cleanly: a device
+/// left to the thread's exit would be destroyed in a thread-local destructor and abort the
+/// process.
+#[test]
+fn thread_ranks_on_the_gpu_backend_end_cleanly() {
+    if !orbit::physics_wgpu::gpu_available_for_tests() {
+        return;
+    }
+    let root = std::env::temp_dir().join(format!("orbit-gpu-ranks-{}", std::process::id()));
+    let args = TrainArgs::parse_from([
+        "train",
+        "--task",
+        "Isaac-Cartpole-v0",
+        "--backend",
+        "wgpu",
+        "--ranks",
+        "2",
+        "--num-envs",
+        "8",
+        "--max-iterations",
+        "2",
+        "--log-root",
+        root.to_str().unwrap(),
+    ]);
+    let runner = std::thread::spawn(move || train(&args, false).map(|r| r.history.len()).ok())
+        .join()
+        .expect("the training thread ends");
+    assert_eq!(runner, Some(2));
+    let _ = std::fs::remove_dir_all(&root);
+}

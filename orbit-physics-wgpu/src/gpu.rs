@@ -89,14 +89,28 @@ pub fn gpu() -> Result<Arc<Gpu>, String> {
 }
 
 /// Opens a device of the calling thread's own, on the adapter the process's would use: the
-/// backends (and a GPU learner) created on this thread afterwards run on it. Data-parallel
-/// ranks that are threads of one process each open one, since a device runs one dispatch at
-/// a time, and a CPU driver (lavapipe) spreads a dispatch over its threads by workgroups: a
-/// rank's few envs would leave most cores idle while the other ranks' dispatches wait.
-pub fn open_device_for_this_thread() -> Result<(), String> {
+/// backends (and a GPU learner) created on this thread afterwards run on it, until the returned
+/// guard is dropped. Data-parallel ranks that are threads of one process each open one, since a
+/// device runs one dispatch at a time, and a CPU driver (lavapipe) spreads a dispatch over its
+/// threads by workgroups: a rank's few envs would leave most cores idle while the other ranks'
+/// dispatches wait.
+pub fn open_device_for_this_thread() -> Result<ThreadDevice, String> {
     let own = pollster::block_on(create()).map(Arc::new)?;
     THREAD_GPU.with(|g| *g.borrow_mut() = Some(own));
-    Ok(())
+    Ok(ThreadDevice(()))
+}
+
+/// The calling thread's own device while it lives (see [`open_device_for_this_thread`]).
+/// Dropping it lets go of the thread's reference in ordinary code: a device left to the
+/// thread's exit would be destroyed in a thread-local destructor, where wgpu cannot run.
+/// Backends made on the thread keep the device until they are dropped.
+pub struct ThreadDevice(());
+
+impl Drop for ThreadDevice {
+    fn drop(&mut self) {
+        let own = THREAD_GPU.with(|g| g.borrow_mut().take());
+        drop(own);
+    }
 }
 
 async fn create() -> Result<Gpu, String> {

@@ -28,7 +28,9 @@ use orbit_core::physics::BackendRegistration;
 
 pub use backend::WgpuBackend;
 pub use compile::{MAX_CONTACTS, MAX_DOFS, MAX_LINKS, default_solver_iterations};
-pub use gpu::{Gpu, gpu, gpu_available_for_tests, open_device_for_this_thread, select_gpu};
+pub use gpu::{
+    Gpu, ThreadDevice, gpu, gpu_available_for_tests, open_device_for_this_thread, select_gpu,
+};
 
 /// Name under which this backend is registered.
 pub const BACKEND_NAME: &str = "wgpu";

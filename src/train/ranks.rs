@@ -210,10 +210,11 @@ fn train_thread_rank(
     use orbit_rl::collective::threads::GroupAborted;
     let rank = crate::distributed::Rank::thread(thread);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        if run.backend == orbit_physics_wgpu::BACKEND_NAME {
-            orbit_physics_wgpu::open_device_for_this_thread()
-                .map_err(|e| RlError::EnvMismatch(format!("a rank's physics device: {e}")))?;
-        }
+        // Dropped at the end of this closure: the runner it returns keeps the device.
+        let _device = (run.backend == orbit_physics_wgpu::BACKEND_NAME)
+            .then(orbit_physics_wgpu::open_device_for_this_thread)
+            .transpose()
+            .map_err(|e| RlError::EnvMismatch(format!("a rank's physics device: {e}")))?;
         train_rank(args, run, show_progress, stop, Some(&rank), ranks)
     }))
     .unwrap_or_else(|payload| match payload.downcast::<GroupAborted>() {
