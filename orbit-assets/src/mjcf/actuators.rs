@@ -9,50 +9,28 @@ impl<'a> Importer<'a> {
     /// The `<motor>`s of `<actuator>` sections.
     pub(super) fn actuators(&self, root: &'a Element) -> Result<Vec<MjcfActuator>, AssetError> {
         let mut actuators = Vec::new();
-        for section in root.children.iter().filter(|c| c.name == "actuator") {
-            for element in &section.children {
-                if element.name != "motor" {
-                    return Err(self.unsupported(
-                        element,
-                        "not supported; the importer takes `<motor>` actuators",
-                    ));
-                }
-                let a = self.defaults.attrs(self.file, element, MAIN)?;
-                let joint = a.text("joint").ok_or_else(|| {
-                    a.error(Some("joint"), "a motor needs the `joint` it drives".into())
-                })?;
-                if !self.joints.contains_key(joint) {
-                    return Err(a.error(
-                        Some("joint"),
-                        format!("no hinge or slide joint is named `{joint}`"),
-                    ));
-                }
-                let gear = a.up_to("gear", 6)?.map_or(1.0, |g| g[0]) as f32;
-                let ctrl_range = match (a.flag("ctrllimited")?, a.numbers::<2>("ctrlrange")?) {
-                    (Some(false), _) | (None, None) => None,
-                    (Some(true), None) => {
-                        return Err(a.error(
-                            Some("ctrlrange"),
-                            "a limited motor needs a `ctrlrange`".into(),
-                        ));
-                    }
-                    (_, Some([lo, hi])) if lo > hi => {
-                        return Err(a.error(
-                            Some("ctrlrange"),
-                            format!("the lower end {lo} is above the upper end {hi}"),
-                        ));
-                    }
-                    (_, Some([lo, hi])) => Some([lo as f32, hi as f32]),
-                };
-                actuators.push(MjcfActuator {
-                    name: a
-                        .text("name")
-                        .map_or_else(|| format!("motor{}", actuators.len()), str::to_string),
-                    joint: joint.to_string(),
-                    gear,
-                    ctrl_range,
-                });
+        for element in self.section_elements(root, "actuator", "motor")? {
+            let a = self.defaults.attrs(self.file, element, MAIN)?;
+            let joint = a.text("joint").ok_or_else(|| {
+                a.error(Some("joint"), "a motor needs the `joint` it drives".into())
+            })?;
+            if !self.joints.contains(joint) {
+                return Err(a.error(
+                    Some("joint"),
+                    format!("no hinge or slide joint is named `{joint}`"),
+                ));
             }
+            let gear = a.up_to("gear", 6)?.map_or(1.0, |g| g[0]) as f32;
+            let ctrl_range = (a.limited_range("ctrllimited", "ctrlrange", "motor")?)
+                .map(|[lo, hi]| [lo as f32, hi as f32]);
+            actuators.push(MjcfActuator {
+                name: a
+                    .text("name")
+                    .map_or_else(|| format!("motor{}", actuators.len()), str::to_string),
+                joint: joint.to_string(),
+                gear,
+                ctrl_range,
+            });
         }
         Ok(actuators)
     }
@@ -60,27 +38,42 @@ impl<'a> Importer<'a> {
     /// The body pairs of `<contact><exclude>`.
     pub(super) fn excludes(&self, root: &'a Element) -> Result<Vec<[String; 2]>, AssetError> {
         let mut pairs = Vec::new();
-        for section in root.children.iter().filter(|c| c.name == "contact") {
-            for element in &section.children {
-                if element.name != "exclude" {
-                    return Err(self.unsupported(
-                        element,
-                        "not supported; the importer takes `<exclude>` in `<contact>`",
-                    ));
+        for element in self.section_elements(root, "contact", "exclude")? {
+            let a = self.plain(element);
+            let body = |key: &str| -> Result<String, AssetError> {
+                let name = a.text(key).ok_or_else(|| {
+                    a.error(Some(key), "an `<exclude>` names `body1` and `body2`".into())
+                })?;
+                if !self.links.iter().any(|l| l.name == name) {
+                    return Err(a.error(Some(key), format!("no body is named `{name}`")));
                 }
-                let a = self.plain(element);
-                let body = |key: &str| -> Result<String, AssetError> {
-                    let name = a.text(key).ok_or_else(|| {
-                        a.error(Some(key), "an `<exclude>` names `body1` and `body2`".into())
-                    })?;
-                    if !self.links.iter().any(|l| l.name == name) {
-                        return Err(a.error(Some(key), format!("no body is named `{name}`")));
-                    }
-                    Ok(name.to_string())
-                };
-                pairs.push([body("body1")?, body("body2")?]);
-            }
+                Ok(name.to_string())
+            };
+            pairs.push([body("body1")?, body("body2")?]);
         }
         Ok(pairs)
+    }
+
+    /// The children of every `<section>` below `root`, each of which must be an `<element>`.
+    fn section_elements(
+        &self,
+        root: &'a Element,
+        section: &str,
+        element: &str,
+    ) -> Result<Vec<&'a Element>, AssetError> {
+        let children = (root.children.iter())
+            .filter(|c| c.name == section)
+            .flat_map(|s| &s.children);
+        let mut found = Vec::new();
+        for child in children {
+            if child.name != element {
+                return Err(self.unsupported(
+                    child,
+                    &format!("not supported; the importer takes `<{element}>` in `<{section}>`"),
+                ));
+            }
+            found.push(child);
+        }
+        Ok(found)
     }
 }

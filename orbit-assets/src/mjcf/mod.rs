@@ -19,7 +19,7 @@ mod geoms;
 mod inertia;
 mod xml;
 
-use std::collections::HashMap;
+use std::collections::HashSet;
 use std::path::Path;
 
 use glam::{Mat3, Quat, Vec3};
@@ -101,7 +101,7 @@ struct Importer<'a> {
     /// The contact class of each link's shapes, and of the world's.
     link_classes: Vec<Vec<ContactClass>>,
     world_classes: Vec<ContactClass>,
-    joints: HashMap<String, usize>,
+    joints: HashSet<String>,
     floating_base: bool,
     root_pose: Pose,
 }
@@ -117,7 +117,7 @@ impl<'a> Importer<'a> {
             links: Vec::new(),
             link_classes: Vec::new(),
             world_classes: Vec::new(),
-            joints: HashMap::new(),
+            joints: HashSet::new(),
             floating_base: false,
             root_pose: Pose::default(),
         };
@@ -479,29 +479,15 @@ impl<'a> Importer<'a> {
         let axis = vec3(a.numbers::<3>("axis")?.unwrap_or([0.0, 0.0, 1.0]))
             .try_normalize()
             .ok_or_else(|| a.error(Some("axis"), "the axis has zero length".into()))?;
-        let range = a.numbers::<2>("range")?;
-        let limits = match (a.flag("limited")?, range) {
-            (Some(false), _) | (None, None) => None,
-            (Some(true), None) => {
-                return Err(a.error(Some("range"), "a limited joint needs a `range`".into()));
-            }
-            (_, Some([lo, hi])) => {
-                if lo > hi {
-                    return Err(a.error(
-                        Some("range"),
-                        format!("the lower end {lo} is above the upper end {hi}"),
-                    ));
-                }
-                let scale = |v: f64| {
-                    if angular && self.degrees {
-                        v.to_radians()
-                    } else {
-                        v
-                    }
-                };
-                Some([scale(lo) as f32, scale(hi) as f32])
+        let scale = |v: f64| {
+            if angular && self.degrees {
+                v.to_radians()
+            } else {
+                v
             }
         };
+        let limits = (a.limited_range("limited", "range", "joint")?)
+            .map(|[lo, hi]| [scale(lo) as f32, scale(hi) as f32]);
         let non_negative = |field: &str| -> Result<f32, AssetError> {
             match a.number(field)? {
                 Some(v) if v < 0.0 => Err(a.error(Some(field), format!("{v} must be >= 0"))),
@@ -520,7 +506,7 @@ impl<'a> Importer<'a> {
             effort_limit: None,
             velocity_limit: None,
         };
-        if self.joints.insert(name.clone(), self.links.len()).is_some() {
+        if !self.joints.insert(name.clone()) {
             return Err(a.error(Some("name"), format!("two joints are named `{name}`")));
         }
         Ok((Some(joint), a.numbers::<3>("pos")?.map_or(Vec3::ZERO, vec3)))

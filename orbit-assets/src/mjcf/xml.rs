@@ -180,6 +180,28 @@ impl Attrs<'_> {
         }
     }
 
+    /// The range `range` (two numbers, lower first) if the element is limited: `flag` `true`,
+    /// or `auto`/absent with a range given (MuJoCo's autolimits). A limited `what` without a
+    /// range is an error.
+    pub fn limited_range(
+        &self,
+        flag: &str,
+        range: &str,
+        what: &str,
+    ) -> Result<Option<[f64; 2]>, AssetError> {
+        match (self.flag(flag)?, self.numbers::<2>(range)?) {
+            (Some(false), _) | (None, None) => Ok(None),
+            (Some(true), None) => {
+                Err(self.error(Some(range), format!("a limited {what} needs a `{range}`")))
+            }
+            (_, Some([lo, hi])) if lo > hi => Err(self.error(
+                Some(range),
+                format!("the lower end {lo} is above the upper end {hi}"),
+            )),
+            (_, Some(r)) => Ok(Some(r)),
+        }
+    }
+
     fn list(&self, name: &str, raw: &str) -> Result<Vec<f64>, AssetError> {
         raw.split_whitespace()
             .map(|word| match word.parse::<f64>() {
