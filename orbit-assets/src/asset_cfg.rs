@@ -112,3 +112,23 @@ inventory::submit! {
         config: include_str!("../assets/cartpole.ron"),
     }
 }
+
+inventory::submit! {
+    AssetCfgDef {
+        name: "ant",
+        kind: AssetKind::Articulation,
+        description: "MuJoCo's Ant (ant.xml) as Isaac Lab's ANT_CFG: a floating base at 0.5 m, eight effort-driven hinges",
+        file: "assets/ant.ron",
+        config: include_str!("../assets/ant.ron"),
+    }
+}
+
+inventory::submit! {
+    AssetCfgDef {
+        name: "ground_plane",
+        kind: AssetKind::StaticObject,
+        description: "an infinite ground plane at z = 0 with friction 1",
+        file: "assets/ground_plane.ron",
+        config: include_str!("../assets/ground_plane.ron"),
+    }
+}

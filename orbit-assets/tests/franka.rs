@@ -154,7 +154,14 @@ fn gravity_torques_match_mujoco() {
         let q = f32s(&data["q"]);
         let want = f32s(&data["qfrc_bias_arm_at_rest"]);
         let mut tau = [0.0f32; 7];
-        kin.bias_forces(&Pose::IDENTITY, &q, &[0.0; 7], gravity, &mut tau);
+        kin.bias_forces(
+            &Pose::IDENTITY,
+            Vec3::ZERO,
+            &q,
+            &[0.0; 7],
+            gravity,
+            &mut tau,
+        );
         for d in 0..7 {
             let err = (tau[d] - want[d]).abs();
             max_err = max_err.max(err);
@@ -312,9 +319,11 @@ fn bundled_scene_is_composed_of_the_asset_configs() {
     assert_eq!(
         names,
         [
+            "ant",
             "cartpole",
             "franka_mount",
             "franka_panda_rod",
+            "ground_plane",
             "lab_table",
             "push_box"
         ]

@@ -9,7 +9,7 @@ use glam::{Quat, Vec3};
 use orbit_assets::{MjcfModel, model_from_mjcf_file, model_from_mjcf_str};
 use orbit_core::kinematics::ArticulationKinematics;
 use orbit_core::math::{Pose, quat_wxyz, rotation_distance};
-use orbit_core::scene::Geometry;
+use orbit_core::scene::{CollisionFilter, Geometry};
 use serde_json::Value;
 
 fn data(name: &str) -> std::path::PathBuf {
@@ -174,6 +174,8 @@ fn ant_structure_follows_the_file() {
     let other = &a.links[a.link_index("back_right_foot").unwrap()].shapes[0];
     assert!(leg.filter.allows(&floor.filter));
     assert!(!leg.filter.allows(&other.filter));
+    // A scene's own ground (the default filter) is a default MuJoCo geom: the legs touch it.
+    assert!(leg.filter.allows(&CollisionFilter::default()));
     match leg.geometry {
         Geometry::Capsule {
             radius,

@@ -111,3 +111,10 @@ fn physically_meaningless_values_are_errors() {
     );
     assert!(e.contains("[-3.1416, 0.0873]"), "the URDF's limits: {e}");
 }
+
+#[test]
+fn a_fixed_base_cannot_start_moving() {
+    let e = error_of(&["articulations[0].init_state.lin_vel=(0.0, 0.0, 1.0)"]);
+    assert!(e.contains("articulations[0].init_state"), "{e}");
+    assert!(e.contains("fixed_base: false"), "{e}");
+}

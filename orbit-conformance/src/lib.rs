@@ -9,9 +9,11 @@
 //! ```
 
 mod facts;
+mod floating_base;
 mod franka;
 mod scenes;
 
 pub use facts::*;
+pub use floating_base::*;
 pub use franka::*;
 pub use scenes::*;

@@ -4,8 +4,9 @@ use glam::{Mat3, Vec3};
 use orbit_core::math::Pose;
 use orbit_core::physics::{PhysicsBackend, SimCfg, build_backend};
 use orbit_core::scene::{
-    ArticulationCfg, ArticulationModel, AssetSource, Geometry, Inertial, Joint, JointKind, Link,
-    Material, RigidObjectCfg, RootStateCfg, SceneCfg, SceneDesc, Shape, StaticObjectCfg,
+    ActuatorCfg, ArticulationCfg, ArticulationModel, AssetSource, Geometry, Inertial, Joint,
+    JointKind, Link, Material, PerJoint, RigidObjectCfg, RootStateCfg, SceneCfg, SceneDesc, Shape,
+    StaticObjectCfg,
 };
 
 /// Resolves a scene config whose models are inline or bundled assets.
@@ -167,4 +168,99 @@ pub fn passive_articulation(model: ArticulationModel) -> ArticulationCfg {
         self_collisions: false,
         fixed_base: true,
     }
+}
+
+/// A floating tree of three links without shapes: a body of mass 2 (its centre of mass off its
+/// origin) carrying two arms of mass 0.5 on hinges about z at one end and about y at the other.
+pub fn floating_tree() -> ArticulationModel {
+    let solid = |mass: f32, com: Vec3, half: Vec3| Inertial {
+        mass,
+        com,
+        inertia: Mat3::from_diagonal(
+            mass / 3.0
+                * Vec3::new(
+                    half.y * half.y + half.z * half.z,
+                    half.x * half.x + half.z * half.z,
+                    half.x * half.x + half.y * half.y,
+                ),
+        ),
+    };
+    let arm = |name: &str, at: Vec3, axis: Vec3| Link {
+        name: name.into(),
+        parent: Some(0),
+        joint: Some(Joint::revolute(
+            format!("{name}_hinge"),
+            Pose::from_pos(at),
+            axis,
+            None,
+        )),
+        inertial: solid(
+            0.5,
+            Vec3::new(at.x.signum() * 0.15, 0.02, 0.0),
+            Vec3::new(0.15, 0.02, 0.02),
+        ),
+        shapes: vec![],
+        frames: vec![],
+    };
+    ArticulationModel {
+        name: "tree".into(),
+        links: vec![
+            Link {
+                name: "body".into(),
+                parent: None,
+                joint: None,
+                inertial: solid(2.0, Vec3::new(0.03, 0.0, 0.01), Vec3::new(0.2, 0.1, 0.05)),
+                shapes: vec![],
+                frames: vec![],
+            },
+            arm("right", Vec3::new(0.2, 0.0, 0.0), Vec3::Z),
+            arm("left", Vec3::new(-0.2, 0.0, 0.0), Vec3::Y),
+        ],
+    }
+}
+
+/// A ground plane at `z = 0` (a static object with the default collision filter).
+pub fn ground(friction: f32) -> StaticObjectCfg {
+    StaticObjectCfg {
+        name: "ground".into(),
+        pose: Pose::IDENTITY,
+        shapes: vec![Shape {
+            geometry: Geometry::Plane,
+            pose: Pose::IDENTITY,
+            material: Material {
+                friction,
+                ..Material::default()
+            },
+            filter: Default::default(),
+        }],
+    }
+}
+
+/// The bundled Ant (`ant.xml`) as a floating base at `height`, its joints starting at
+/// `joint_pos` (by name) and held there by stiff drives (stiffness 1 000 N·m/rad, damping
+/// 10 N·m·s/rad).
+pub fn standing_ant(height: f32, joint_pos: &[(&str, f32)]) -> ArticulationCfg {
+    let mut ant = passive_articulation(ArticulationModel {
+        name: "ant".into(),
+        links: vec![],
+    });
+    ant.spawn = AssetSource::Mjcf {
+        path: "ant.xml".into(),
+    };
+    ant.fixed_base = false;
+    ant.init_state.pos = Vec3::new(0.0, 0.0, height);
+    ant.init_state.joint_pos = joint_pos.iter().map(|&(n, q)| (n.into(), q)).collect();
+    ant.actuators.insert(
+        "legs".into(),
+        ActuatorCfg {
+            joint_names_expr: vec![".*".into()],
+            stiffness: PerJoint::All(1000.0),
+            damping: PerJoint::All(10.0),
+            effort_limit: None,
+            velocity_limit: None,
+            armature: None,
+            friction: None,
+        },
+    );
+    ant
 }

@@ -98,13 +98,21 @@ impl ArticulationKinematics {
         self.model.links[link].inertial = inertial;
     }
 
-    /// Link origin velocities `(linear, angular)` in world axes for joint velocities `qd`, after
-    /// [`forward`](Self::forward) (fixed root).
-    pub fn link_velocities(&self, qd: &[f32], lin: &mut [Vec3], ang: &mut [Vec3]) {
+    /// Link origin velocities `(linear, angular)` in world axes for joint velocities `qd` and
+    /// the root link's origin moving at `root_lin_vel` and turning at `root_ang_vel` (zero for
+    /// a fixed base), after [`forward`](Self::forward).
+    pub fn link_velocities(
+        &self,
+        root_lin_vel: Vec3,
+        root_ang_vel: Vec3,
+        qd: &[f32],
+        lin: &mut [Vec3],
+        ang: &mut [Vec3],
+    ) {
         for (i, link) in self.model.links.iter().enumerate() {
             let Some(p) = link.parent else {
-                lin[i] = Vec3::ZERO;
-                ang[i] = Vec3::ZERO;
+                lin[i] = root_lin_vel;
+                ang[i] = root_ang_vel;
                 continue;
             };
             let r = self.poses[i].pos - self.poses[p].pos;
@@ -152,11 +160,15 @@ impl ArticulationKinematics {
         }
     }
 
-    /// Generalized bias forces `c(q, q̇) + g(q)`: the joint efforts that produce zero joint
-    /// acceleration (recursive Newton–Euler with the base accelerating at `−gravity`).
+    /// Generalized bias forces `c(q, q̇) + g(q)` of the joints: the joint efforts that produce
+    /// zero joint acceleration while the root does not accelerate either (recursive
+    /// Newton–Euler with the root accelerating at `−gravity` and turning at `root_ang_vel`, zero
+    /// for a fixed base). For a floating base these are the joint rows of MuJoCo's `qfrc_bias`;
+    /// the root's linear velocity does not enter them.
     pub fn bias_forces(
         &mut self,
         root: &Pose,
+        root_ang_vel: Vec3,
         q: &[f32],
         qd: &[f32],
         gravity: Vec3,
@@ -177,7 +189,7 @@ impl ArticulationKinematics {
         // Forward pass: velocities and accelerations of link origins (world frame).
         for (i, link) in links.iter().enumerate() {
             let Some(p) = link.parent else {
-                self.ang_vel[i] = Vec3::ZERO;
+                self.ang_vel[i] = root_ang_vel;
                 self.ang_acc[i] = Vec3::ZERO;
                 self.lin_acc[i] = -gravity;
                 continue;

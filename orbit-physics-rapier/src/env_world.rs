@@ -34,8 +34,14 @@ pub(crate) struct EnvArticulation {
     pub dof_link: Vec<usize>,
     /// Kinematics and dynamics of this env's copy (per-env masses).
     pub kin: ArticulationKinematics,
-    /// Root pose.
+    /// Root pose: the fixed base's, or a floating base's as of the last look.
     pub root: OrbitPose,
+    /// Whether the root is welded to the world (else the multibody's first six dofs are a
+    /// free joint: the root's centre-of-mass velocity and its angular velocity, world axes).
+    pub fixed_base: bool,
+    /// A floating root link's centre of mass in its frame: the origin of its rigid body (zero
+    /// for a fixed base).
+    pub root_com: Vec3,
     /// This env's published state.
     pub out: ArticulationRow,
     /// Passive joint damping of each dof (the drive's damping is added while it is active).
@@ -199,13 +205,29 @@ fn build_articulation(
     let poses = kin
         .forward(&desc.root_pose, &desc.default_joint_pos)
         .to_vec();
+    // A floating root's rigid body has its origin at the link's centre of mass: rapier moves a
+    // free root's origin with the velocity of its centre of mass.
+    let root_com = if desc.fixed_base {
+        Vec3::ZERO
+    } else {
+        model.links[0].inertial.com
+    };
+    let to_root_body = OrbitPose::from_pos(-root_com);
     let mut links = Vec::with_capacity(model.links.len());
     for (i, link) in model.links.iter().enumerate() {
-        let body = RigidBodyModel {
+        let mut body = RigidBodyModel {
             name: link.name.clone(),
             inertial: link.inertial,
             shapes: link.shapes.clone(),
         };
+        let mut pose = poses[i];
+        if i == 0 && !desc.fixed_base {
+            body.inertial.com = Vec3::ZERO;
+            for s in &mut body.shapes {
+                s.pose = to_root_body.mul_pose(&s.pose);
+            }
+            pose = pose.mul_pose(&OrbitPose::from_pos(root_com));
+        }
         if i > 0 && link.inertial.mass <= 0.0 {
             return Err(PhysicsError::Unsupported {
                 backend: "rapier".into(),
@@ -215,7 +237,7 @@ fn build_articulation(
                 ),
             });
         }
-        links.push(add_body(world, &body, &poses[i], i > 0));
+        links.push(add_body(world, &body, &pose, i > 0 || !desc.fixed_base));
     }
     let mut dof_mb_link = Vec::new();
     let mut dof_axis = Vec::new();
@@ -225,7 +247,12 @@ fn build_articulation(
         let (Some(parent), Some(joint)) = (link.parent, &link.joint) else {
             unreachable!("validated model: every non-root link has a parent joint")
         };
-        let gj = rapier_joint(&joint.origin, joint.axis, joint.kind, joint.limits);
+        let origin = if parent == 0 {
+            to_root_body.mul_pose(&joint.origin)
+        } else {
+            joint.origin
+        };
+        let gj = rapier_joint(&origin, joint.axis, joint.kind, joint.limits);
         let handle = world
             .multibody_joints
             .insert(links[parent], links[i], gj, false)
@@ -257,13 +284,15 @@ fn build_articulation(
             dof_link.push(i);
         }
     }
-    if dof_link.len() > MAX_DOFS {
+    // A floating base adds its six free dofs in front of the joints' in the multibody.
+    let root_dofs = if desc.fixed_base { 0 } else { 6 };
+    if dof_link.len() + root_dofs > MAX_DOFS {
         return Err(PhysicsError::Unsupported {
             backend: "rapier".into(),
             reason: format!(
                 "articulation `{}` has {} dofs; at most {MAX_DOFS} are supported",
                 desc.name,
-                dof_link.len()
+                dof_link.len() + root_dofs
             ),
         });
     }
@@ -302,6 +331,8 @@ fn build_articulation(
         dof_link,
         kin,
         root: desc.root_pose,
+        fixed_base: desc.fixed_base,
+        root_com,
         out: ArticulationRow::new(n_dofs, n_links),
         joint_damping,
         effort: vec![0.0; n_dofs],
@@ -338,6 +369,14 @@ impl EnvWorld {
             env.write_root_state(o, &desc.default_root_state);
         }
         for (a, desc) in scene.articulations.iter().enumerate() {
+            if !desc.fixed_base {
+                let root = RootState {
+                    pose: desc.root_pose,
+                    lin_vel: desc.root_lin_vel,
+                    ang_vel: desc.root_ang_vel,
+                };
+                env.write_articulation_root_state(a, &root);
+            }
             env.write_joint_state(a, &desc.default_joint_pos, &desc.default_joint_vel);
         }
         Ok(env)
@@ -353,7 +392,9 @@ impl EnvWorld {
         drives: &[JointDrive],
         input: &ArticulationInputs<'_>,
     ) {
+        let root = self.read_articulation_root_state(a);
         let art = &mut self.arts[a];
+        art.root = root.pose;
         let mb = self
             .world
             .multibody_joints
@@ -372,11 +413,22 @@ impl EnvWorld {
                 + input.effort(d, &out.bias);
             out.applied[d] = tau.clamp(-dr.effort_limit, dr.effort_limit);
         }
-        art.kin
-            .bias_forces(&art.root, &out.q, &out.qd, gravity, &mut out.bias);
+        art.kin.bias_forces(
+            &art.root,
+            root.ang_vel,
+            &out.q,
+            &out.qd,
+            gravity,
+            &mut out.bias,
+        );
         // `bias_forces` ran forward kinematics on the current state.
-        art.kin
-            .link_velocities(&out.qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
+        art.kin.link_velocities(
+            root.lin_vel,
+            root.ang_vel,
+            &out.qd,
+            &mut out.link_lin_vel,
+            &mut out.link_ang_vel,
+        );
         let poses = art.kin.forward(&art.root, &out.q);
         for (l, p) in poses.iter().enumerate() {
             out.link_pos[l] = p.pos;
@@ -408,15 +460,32 @@ impl EnvWorld {
         }
         mb.forward_kinematics(&self.world.bodies, false);
         mb.update_rigid_bodies(&mut self.world.bodies, true);
-        // Give the link bodies the velocities of the new joint state.
+        self.sync_link_velocities(a);
+    }
+
+    /// Gives the link bodies of articulation `a` the velocities of its multibody's joint and
+    /// root state (after the multibody's link poses were updated).
+    fn sync_link_velocities(&mut self, a: usize) {
+        let root = self.read_articulation_root_state(a);
+        let (mut q, mut qd) = ([0.0f32; MAX_DOFS], [0.0f32; MAX_DOFS]);
+        let n = self.arts[a].dof_link.len();
+        self.read_joint_state(a, &mut q[..n], &mut qd[..n]);
+        let (q, qd) = (&q[..n], &qd[..n]);
         let art = &mut self.arts[a];
+        art.root = root.pose;
         art.kin.forward(&art.root, q);
         let out = &mut art.out;
-        art.kin
-            .link_velocities(qd, &mut out.link_lin_vel, &mut out.link_ang_vel);
-        for (l, &h) in art.links.iter().enumerate().skip(1) {
+        art.kin.link_velocities(
+            root.lin_vel,
+            root.ang_vel,
+            qd,
+            &mut out.link_lin_vel,
+            &mut out.link_ang_vel,
+        );
+        let first = usize::from(art.fixed_base);
+        for (l, &h) in art.links.iter().enumerate().skip(first) {
             let rb = &mut self.world.bodies[h];
-            let origin = rb.position().translation;
+            let origin = art.kin.frame_pose(l, &OrbitPose::IDENTITY).pos;
             let com = rb.center_of_mass();
             rb.set_linvel(
                 out.link_lin_vel[l] + out.link_ang_vel[l].cross(com - origin),
@@ -424,6 +493,78 @@ impl EnvWorld {
             );
             rb.set_angvel(out.link_ang_vel[l], true);
         }
+    }
+
+    /// The joint positions and velocities of articulation `a` in its multibody.
+    fn read_joint_state(&self, a: usize, q: &mut [f32], qd: &mut [f32]) {
+        let art = &self.arts[a];
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody(art.multibody)
+            .expect("multibody exists");
+        let vel = mb.generalized_velocity();
+        for d in 0..q.len() {
+            let link = mb.link(art.dof_mb_link[d]).expect("link exists");
+            q[d] = link.joint().coords()[art.dof_axis[d]];
+            qd[d] = vel[link.assembly_id()];
+        }
+    }
+
+    /// The root link's state of articulation `a` (velocity of the link origin; at rest for a
+    /// fixed base).
+    pub fn read_articulation_root_state(&self, a: usize) -> RootState {
+        let art = &self.arts[a];
+        if art.fixed_base {
+            return RootState {
+                pose: art.root,
+                lin_vel: Vec3::ZERO,
+                ang_vel: Vec3::ZERO,
+            };
+        }
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody(art.multibody)
+            .expect("multibody exists");
+        let p = mb.root().local_to_world();
+        let com = p.rotation * art.root_com;
+        let pose = OrbitPose::new(p.translation - com, p.rotation);
+        let v = mb.generalized_velocity();
+        let (v_com, w) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
+        RootState {
+            pose,
+            lin_vel: v_com - w.cross(com),
+            ang_vel: w,
+        }
+    }
+
+    /// Overwrites the root state of floating-base articulation `a` (velocity of the root link's
+    /// origin); the joint state is kept.
+    pub fn write_articulation_root_state(&mut self, a: usize, s: &RootState) {
+        let art = &self.arts[a];
+        debug_assert!(
+            !art.fixed_base,
+            "the backend refuses root writes to a fixed base"
+        );
+        let root = art.links[0];
+        let com = s.pose.rot * art.root_com;
+        let body = OrbitPose::new(s.pose.pos + com, s.pose.rot);
+        self.world.bodies[root].set_position(to_rapier_pose(&body), true);
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody_mut(art.multibody)
+            .expect("multibody exists");
+        mb.forward_kinematics(&self.world.bodies, true);
+        mb.update_rigid_bodies(&mut self.world.bodies, true);
+        let v_com = s.lin_vel + s.ang_vel.cross(com);
+        let mut v = mb.generalized_velocity_mut();
+        for i in 0..3 {
+            v[i] = v_com[i];
+            v[3 + i] = s.ang_vel[i];
+        }
+        self.sync_link_velocities(a);
     }
 
     /// Overwrites the root state of rigid object `o` (velocities of the body origin).
@@ -585,12 +726,17 @@ impl EnvWorld {
     /// Gives a body the mass properties `inertial` (a link's also in the kinematics that
     /// computes the bias forces).
     pub fn set_inertial(&mut self, body: BodyRef, inertial: &Inertial) {
+        let mut in_body = *inertial;
         if let BodyRef::Link { articulation, link } = body {
-            self.arts[articulation].kin.set_inertial(link, *inertial);
+            let art = &mut self.arts[articulation];
+            art.kin.set_inertial(link, *inertial);
+            if link == 0 {
+                in_body.com -= art.root_com;
+            }
         }
         let handle = self.body(body);
         let rb = &mut self.world.bodies[handle];
-        rb.set_additional_mass_properties(mass_props(inertial), true);
+        rb.set_additional_mass_properties(mass_props(&in_body), true);
         rb.recompute_mass_properties_from_colliders(&self.world.colliders);
     }
 

@@ -19,7 +19,7 @@ use orbit_core::math::Pose;
 use orbit_core::physics::{
     ArticulationView, BackendProbe, BackendRegistration, BodyRef, DeviceKind, PhysicsBackend,
     PhysicsError, RigidObjectView, SceneLayout, SimCfg, check_batch, check_dof_ids, check_env_ids,
-    check_root_states, check_values,
+    check_floating_base, check_root_states, check_values,
 };
 use orbit_core::scene::{Inertial, JointDrive, RootState, SceneDesc};
 use rayon::prelude::*;
@@ -110,6 +110,7 @@ pub struct RapierBackend {
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Written {
     Articulation(usize),
+    ArticulationRoot(usize),
     Object(usize),
 }
 
@@ -239,6 +240,17 @@ impl RapierBackend {
             let r = e * b.dofs..(e + 1) * b.dofs;
             // The applied-effort estimate of the next publish adds the last bias forces.
             env.arts[a].out.bias.copy_from_slice(&b.bias[r.clone()]);
+            // The root first: a joint-state write gives the links velocities on top of it.
+            if !self.layout.articulations[a].fixed_base && written != Written::ArticulationRoot(a) {
+                let root = e * b.links;
+                let origin = b.link_pos[root];
+                let state = RootState {
+                    pose: Pose::new(origin, b.link_quat[root]),
+                    lin_vel: b.link_lin_vel[root],
+                    ang_vel: b.link_ang_vel[root],
+                };
+                env.write_articulation_root_state(a, &state);
+            }
             if written != Written::Articulation(a) {
                 env.write_joint_state(a, &b.joint_pos[r.clone()], &b.joint_vel[r]);
             }
@@ -491,6 +503,24 @@ impl PhysicsBackend for RapierBackend {
         for (i, &e) in env_ids.iter().enumerate() {
             let r = i * dofs..(i + 1) * dofs;
             self.envs[e].write_joint_state(a, &pos[r.clone()], &vel[r]);
+        }
+        self.publish(env_ids);
+        Ok(())
+    }
+
+    fn write_articulation_root_state(
+        &mut self,
+        a: usize,
+        env_ids: &[usize],
+        states: &[RootState],
+    ) -> Result<(), PhysicsError> {
+        self.check_articulation(a)?;
+        check_floating_base(&self.layout, a)?;
+        check_env_ids(env_ids, self.envs.len())?;
+        check_root_states(states, env_ids.len())?;
+        self.renew(env_ids, Written::ArticulationRoot(a))?;
+        for (&e, s) in env_ids.iter().zip(states) {
+            self.envs[e].write_articulation_root_state(a, s);
         }
         self.publish(env_ids);
         Ok(())

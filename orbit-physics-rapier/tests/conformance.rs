@@ -18,6 +18,21 @@ fn cart_pendulum_period() {
 }
 
 #[test]
+fn free_flight_momentum() {
+    orbit_conformance::free_flight_momentum(BACKEND_NAME);
+}
+
+#[test]
+fn floating_root_writes() {
+    orbit_conformance::floating_root_writes(BACKEND_NAME);
+}
+
+#[test]
+fn ant_standing_height() {
+    orbit_conformance::ant_standing_height(BACKEND_NAME);
+}
+
+#[test]
 fn box_rests_on_table() {
     orbit_conformance::box_rests_on_table(BACKEND_NAME);
 }

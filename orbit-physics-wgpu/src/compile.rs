@@ -261,6 +261,13 @@ impl CompiledScene {
         let mut shape_filters = Vec::new();
         let mut shape_art: Vec<Option<usize>> = Vec::new();
         for (ai, art) in scene.articulations.iter().enumerate() {
+            if !art.fixed_base {
+                return Err(unsupported(format!(
+                    "articulation `{}` has a floating base, which this backend does not simulate \
+                     yet; use `sim.backend: \"rapier\"` (or `--backend rapier`)",
+                    art.name
+                )));
+            }
             let (link0, dof0) = (links.len(), dofs.len());
             for (li, link) in art.model.links.iter().enumerate() {
                 let global = link0 + li;

@@ -139,8 +139,12 @@ impl<'a> Importer<'a> {
 
     /// Gives every shape a collision filter that reproduces MuJoCo's rule (two geoms collide
     /// when either one's `contype` meets the other's `conaffinity`): one group bit per
-    /// distinct contact class, each class's mask the bits of the classes it collides with.
+    /// distinct contact class from bit 1 on, each class's mask the bits of the classes it
+    /// collides with. Bit 0 is the scene's: shapes outside the model (a scene's ground, with the
+    /// default filter) count as MuJoCo's default geoms (`contype = conaffinity = 1`), so a
+    /// class's mask holds bit 0 when it collides with those.
     pub(super) fn assign_filters(&mut self, world: &mut [Shape]) -> Result<(), AssetError> {
+        const SCENE: ContactClass = (1, 1);
         let mut distinct: Vec<ContactClass> = Vec::new();
         for &c in self
             .link_classes
@@ -152,21 +156,22 @@ impl<'a> Importer<'a> {
                 distinct.push(c);
             }
         }
-        if distinct.len() > 32 {
+        if distinct.len() > 31 {
             return Err(AssetError::InvalidValue {
                 file: self.file.to_string(),
                 element: "geoms".into(),
                 problem: format!(
-                    "{} distinct contype/conaffinity pairs; at most 32 are supported",
+                    "{} distinct contype/conaffinity pairs; at most 31 are supported",
                     distinct.len()
                 ),
             });
         }
+        let meets = |c: ContactClass, o: ContactClass| (c.0 & o.1) != 0 || (o.0 & c.1) != 0;
         let filter = |c: ContactClass| {
-            let bit = |k: ContactClass| 1u32 << distinct.iter().position(|&d| d == k).unwrap_or(0);
+            let bit = |k: ContactClass| 2u32 << distinct.iter().position(|&d| d == k).unwrap_or(0);
             let mask = (distinct.iter())
-                .filter(|&&o| (c.0 & o.1) != 0 || (o.0 & c.1) != 0)
-                .fold(0, |m, &o| m | bit(o));
+                .filter(|&&o| meets(c, o))
+                .fold(u32::from(meets(c, SCENE)), |m, &o| m | bit(o));
             CollisionFilter {
                 groups: bit(c),
                 mask,

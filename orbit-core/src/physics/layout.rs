@@ -14,6 +14,8 @@ pub struct ArticulationLayout {
     pub link_names: Vec<String>,
     /// The simulated model (fixed joints merged), for frames and kinematics.
     pub model: ArticulationModel,
+    /// Whether the root link is welded to the world (else link 0 is a floating base).
+    pub fixed_base: bool,
 }
 
 impl ArticulationLayout {
@@ -59,6 +61,7 @@ impl SceneLayout {
                     joint_names: a.model.joint_names(),
                     link_names: a.model.links.iter().map(|l| l.name.clone()).collect(),
                     model: a.model.clone(),
+                    fixed_base: a.fixed_base,
                 })
                 .collect(),
             rigid_objects: desc.rigid_objects.iter().map(|o| o.name.clone()).collect(),

@@ -289,6 +289,15 @@ pub trait PhysicsBackend: Send + Sync {
         pos: &[f32],
         vel: &[f32],
     ) -> Result<(), PhysicsError>;
+    /// Overwrites the root state (pose, and velocity of the root link's origin) of
+    /// floating-base articulation `a` in the listed envs; the joint state is kept. A fixed base
+    /// is an error.
+    fn write_articulation_root_state(
+        &mut self,
+        a: usize,
+        env_ids: &[usize],
+        states: &[RootState],
+    ) -> Result<(), PhysicsError>;
     /// Overwrites the root state of a rigid object in the listed envs.
     fn write_root_state(
         &mut self,
@@ -373,6 +382,20 @@ pub fn check_root_states(states: &[RootState], count: usize) -> Result<(), Physi
                 "root state {s:?} must be finite with a unit quaternion"
             )));
         }
+    }
+    Ok(())
+}
+
+/// Checks articulation `a` of `layout` (an index already checked) has a floating base, whose
+/// root state can be written.
+pub fn check_floating_base(layout: &SceneLayout, a: usize) -> Result<(), PhysicsError> {
+    let art = &layout.articulations[a];
+    if art.fixed_base {
+        return Err(PhysicsError::InvalidInput(format!(
+            "articulation `{}` has a fixed base, whose root state cannot be written; set \
+             `fixed_base: false` in its config to make it a floating base",
+            art.name
+        )));
     }
     Ok(())
 }

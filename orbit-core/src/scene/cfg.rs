@@ -44,6 +44,14 @@ pub enum AssetSource {
         #[serde(default)]
         skip_mesh_collisions: bool,
     },
+    /// An MJCF file (MuJoCo's XML): a bundled asset name or a path relative to the config
+    /// file. Its top-level body is the root link, placed by `init_state` (the body's own
+    /// position in the file is not used); the world body's shapes (a ground plane) are left
+    /// out: a scene adds its ground as a static object.
+    Mjcf {
+        /// File name or path.
+        path: String,
+    },
     /// A model written out in the config itself.
     Model(ArticulationModel),
 }
@@ -65,7 +73,8 @@ pub struct ArticulationCfg {
     /// Whether links of this articulation collide with each other (parent–child pairs never do).
     #[serde(default)]
     pub self_collisions: bool,
-    /// Whether the root link is welded to the world (only fixed bases are supported for now).
+    /// Whether the root link is welded to the world (Isaac Lab `fix_root_link`); `false` gives
+    /// the root six free degrees of freedom (a floating base: legged robots, the Ant).
     #[serde(default = "yes")]
     pub fixed_base: bool,
 }
@@ -90,6 +99,12 @@ pub struct ArticulationInitState {
     /// Joint velocities by regex (unmatched joints start at 0).
     #[serde(default)]
     pub joint_vel: BTreeMap<String, f32>,
+    /// Root linear velocity (world axes) of a floating base.
+    #[serde(default)]
+    pub lin_vel: Vec3,
+    /// Root angular velocity (world axes) of a floating base.
+    #[serde(default)]
+    pub ang_vel: Vec3,
 }
 
 impl Default for ArticulationInitState {
@@ -99,6 +114,8 @@ impl Default for ArticulationInitState {
             rot: Quat::IDENTITY,
             joint_pos: BTreeMap::new(),
             joint_vel: BTreeMap::new(),
+            lin_vel: Vec3::ZERO,
+            ang_vel: Vec3::ZERO,
         }
     }
 }

@@ -4,8 +4,9 @@
 use glam::{Mat3, Vec3};
 use regex::Regex;
 
-use super::cfg::{ActuatorCfg, ArticulationCfg, AssetSource, PerJoint, RigidObjectCfg, SceneCfg};
-use super::model::{ArticulationModel, Geometry, Inertial, Joint, RigidBodyModel, Shape};
+use super::articulation::resolve_articulation;
+use super::cfg::{AssetSource, RigidObjectCfg, SceneCfg};
+use super::model::{ArticulationModel, Geometry, Inertial, RigidBodyModel, Shape};
 use crate::math::Pose;
 
 /// A pose plus linear and angular velocity of a body origin (world axes).
@@ -50,8 +51,14 @@ pub struct ArticulationDesc {
     pub name: String,
     /// Model with fixed joints merged (only movable joints below the root).
     pub model: ArticulationModel,
-    /// Root pose relative to the env origin.
+    /// Root pose relative to the env origin (the default one, for a floating base).
     pub root_pose: Pose,
+    /// Whether the root is welded to the world; otherwise it is a floating base.
+    pub fixed_base: bool,
+    /// Default root linear velocity of a floating base (world axes, of the root link's origin).
+    pub root_lin_vel: Vec3,
+    /// Default root angular velocity of a floating base (world axes).
+    pub root_ang_vel: Vec3,
     /// Default joint positions (dof order).
     pub default_joint_pos: Vec<f32>,
     /// Default joint velocities (dof order).
@@ -213,59 +220,6 @@ pub fn match_names(
     Ok(selected)
 }
 
-/// Writes values given per regex into `out` (joint order); a joint matched twice is an error.
-fn apply_by_name(
-    field: &str,
-    entity: &str,
-    joints: &[String],
-    values: &std::collections::BTreeMap<String, f32>,
-    out: &mut [f32],
-) -> Result<Vec<bool>, SceneError> {
-    let mut seen = vec![false; joints.len()];
-    for (pattern, &value) in values {
-        for i in match_joints(
-            &format!("{field}[\"{pattern}\"]"),
-            entity,
-            joints,
-            std::slice::from_ref(pattern),
-        )? {
-            if std::mem::replace(&mut seen[i], true) {
-                return Err(SceneError::Ambiguous {
-                    field: field.to_string(),
-                    joint: joints[i].clone(),
-                    entity: entity.to_string(),
-                });
-            }
-            out[i] = value;
-        }
-    }
-    Ok(seen)
-}
-
-/// Applies a [`PerJoint`] value to the selected joints.
-fn apply_per_joint(
-    field: &str,
-    entity: &str,
-    joints: &[String],
-    selected: &[usize],
-    value: &PerJoint,
-    set: &mut dyn FnMut(usize, f32),
-) -> Result<(), SceneError> {
-    match value {
-        PerJoint::All(v) => selected.iter().for_each(|&i| set(i, *v)),
-        PerJoint::ByName(map) => {
-            let mut tmp = vec![f32::NAN; joints.len()];
-            apply_by_name(field, entity, joints, map, &mut tmp)?;
-            for &i in selected {
-                if !tmp[i].is_nan() {
-                    set(i, tmp[i]);
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
 impl SceneCfg {
     /// Resolves the config: loads models, merges fixed joints, matches regexes, fills defaults.
     pub fn resolve(&self, load: &ModelLoader<'_>) -> Result<SceneDesc, SceneError> {
@@ -335,180 +289,6 @@ impl SceneCfg {
             static_objects,
         })
     }
-}
-
-fn resolve_articulation(
-    field: &str,
-    cfg: &ArticulationCfg,
-    load: &ModelLoader<'_>,
-) -> Result<ArticulationDesc, SceneError> {
-    if !cfg.fixed_base {
-        return Err(SceneError::Invalid {
-            field: format!("{field}.fixed_base"),
-            message: "floating-base articulations are not supported yet; set `fixed_base: true`"
-                .into(),
-        });
-    }
-    let raw = load(&cfg.spawn).map_err(|message| SceneError::Asset {
-        field: format!("{field}.spawn"),
-        message,
-    })?;
-    raw.validate().map_err(|e| SceneError::Asset {
-        field: format!("{field}.spawn"),
-        message: e.to_string(),
-    })?;
-    let model = raw.merge_fixed_joints();
-    let joints = model.joint_names();
-    let n = joints.len();
-    let entity = cfg.name.as_str();
-
-    let mut default_joint_pos = vec![0.0; n];
-    let mut default_joint_vel = vec![0.0; n];
-    let given_pos = apply_by_name(
-        &format!("{field}.init_state.joint_pos"),
-        entity,
-        &joints,
-        &cfg.init_state.joint_pos,
-        &mut default_joint_pos,
-    )?;
-    apply_by_name(
-        &format!("{field}.init_state.joint_vel"),
-        entity,
-        &joints,
-        &cfg.init_state.joint_vel,
-        &mut default_joint_vel,
-    )?;
-
-    let dof_links = model.dof_links();
-    let asset_joint = |i: usize| {
-        model.links[dof_links[i]]
-            .joint
-            .as_ref()
-            .expect("dof link has a joint")
-    };
-    // A start outside the joint's range is not a state the simulation can be in.
-    for (i, &q) in default_joint_pos.iter().enumerate() {
-        let range = asset_joint(i)
-            .limits
-            .unwrap_or([f32::NEG_INFINITY, f32::INFINITY]);
-        if given_pos[i] && !(q.is_finite() && q >= range[0] - 1e-6 && q <= range[1] + 1e-6) {
-            return Err(SceneError::Invalid {
-                field: format!("{field}.init_state.joint_pos"),
-                message: format!(
-                    "joint `{}` of `{entity}` starts at {q}, outside its limits [{}, {}]; \
-                     choose a position inside them",
-                    joints[i], range[0], range[1]
-                ),
-            });
-        }
-    }
-    let mut drives: Vec<JointDrive> = (0..n)
-        .map(|i| JointDrive {
-            // As Isaac Lab 1.0 does for implicit actuators: the asset's effort limit is enforced
-            // unless the actuator overrides it; its velocity limit is not (only an explicit
-            // `velocity_limit` in the actuator group is).
-            effort_limit: asset_joint(i).effort_limit.unwrap_or(f32::INFINITY),
-            ..JointDrive::default()
-        })
-        .collect();
-    let mut model = model;
-    let mut covered = vec![false; n];
-    for (group, act) in &cfg.actuators {
-        let f = format!("{field}.actuators.{group}");
-        let selected = match_joints(
-            &format!("{f}.joint_names_expr"),
-            entity,
-            &joints,
-            &act.joint_names_expr,
-        )?;
-        selected.iter().for_each(|&i| covered[i] = true);
-        resolve_actuator(
-            &f,
-            entity,
-            &joints,
-            &selected,
-            act,
-            &mut drives,
-            &mut model,
-            &dof_links,
-        )?;
-    }
-    for (i, c) in covered.iter().enumerate() {
-        if !c {
-            tracing::warn!(
-                "{field}: joint `{}` of `{entity}` is in no actuator group; it is unactuated",
-                joints[i]
-            );
-        }
-    }
-    Ok(ArticulationDesc {
-        name: cfg.name.clone(),
-        model,
-        root_pose: Pose::new(cfg.init_state.pos, cfg.init_state.rot),
-        default_joint_pos,
-        default_joint_vel,
-        drives,
-        self_collisions: cfg.self_collisions,
-    })
-}
-
-/// Rejects negative or NaN gains and limits.
-fn check_non_negative(field: &str, value: &PerJoint) -> Result<(), SceneError> {
-    let bad = match value {
-        PerJoint::All(v) => (v.is_nan() || *v < 0.0).then_some(*v),
-        PerJoint::ByName(m) => m.values().copied().find(|v| v.is_nan() || *v < 0.0),
-    };
-    match bad {
-        Some(v) => Err(SceneError::Invalid {
-            field: field.to_string(),
-            message: format!("expected values >= 0, got {v}"),
-        }),
-        None => Ok(()),
-    }
-}
-
-#[allow(clippy::too_many_arguments)]
-fn resolve_actuator(
-    f: &str,
-    entity: &str,
-    joints: &[String],
-    selected: &[usize],
-    act: &ActuatorCfg,
-    drives: &mut [JointDrive],
-    model: &mut ArticulationModel,
-    dof_links: &[usize],
-) -> Result<(), SceneError> {
-    let apply = |name: &str, value: &PerJoint, set: &mut dyn FnMut(usize, f32)| {
-        let field = format!("{f}.{name}");
-        check_non_negative(&field, value)?;
-        apply_per_joint(&field, entity, joints, selected, value, set)
-    };
-    apply("stiffness", &act.stiffness, &mut |i, v| {
-        drives[i].stiffness = v
-    })?;
-    apply("damping", &act.damping, &mut |i, v| drives[i].damping = v)?;
-    if let Some(value) = &act.effort_limit {
-        apply("effort_limit", value, &mut |i, v| {
-            drives[i].effort_limit = v
-        })?;
-    }
-    if let Some(value) = &act.velocity_limit {
-        apply("velocity_limit", value, &mut |i, v| {
-            drives[i].velocity_limit = v
-        })?;
-    }
-    let mut joint_param =
-        |name: &str, value: &Option<PerJoint>, set: fn(&mut Joint, f32)| match value {
-            Some(value) => apply(name, value, &mut |i, v| {
-                if let Some(j) = model.links[dof_links[i]].joint.as_mut() {
-                    set(j, v);
-                }
-            }),
-            None => Ok(()),
-        };
-    joint_param("armature", &act.armature, |j, v| j.armature = v)?;
-    joint_param("friction", &act.friction, |j, v| j.friction = v)?;
-    Ok(())
 }
 
 fn resolve_rigid_object(field: &str, cfg: &RigidObjectCfg) -> Result<RigidObjectDesc, SceneError> {

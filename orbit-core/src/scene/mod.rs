@@ -1,5 +1,6 @@
 //! Scene descriptions: asset models, the declarative scene config, and the resolved scene.
 
+mod articulation;
 mod cfg;
 mod desc;
 mod model;

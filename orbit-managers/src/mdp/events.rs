@@ -1,8 +1,10 @@
 //! Event terms: resets of joint and root state, randomisation of materials and masses.
+use orbit_core::scene::{ArticulationDesc, RootState};
+
 use super::*;
 
-/// `reset_scene_to_default`: default joint state of every articulation and default root state
-/// of every rigid object.
+/// `reset_scene_to_default`: default joint state of every articulation, default root state of
+/// every floating base and rigid object.
 struct ResetSceneToDefault;
 
 impl EventTerm for ResetSceneToDefault {
@@ -13,6 +15,13 @@ impl EventTerm for ResetSceneToDefault {
         _rng: &mut EnvRngs,
     ) -> Result<(), EnvError> {
         for a in 0..scene.desc.articulations.len() {
+            let desc = &scene.desc.articulations[a];
+            if !desc.fixed_base {
+                let states = vec![default_root_state(desc); env_ids.len()];
+                scene
+                    .backend
+                    .write_articulation_root_state(a, env_ids, &states)?;
+            }
             let desc = &scene.desc.articulations[a];
             let pos = desc.default_joint_pos.repeat(env_ids.len());
             let vel = desc.default_joint_vel.repeat(env_ids.len());
@@ -28,11 +37,20 @@ impl EventTerm for ResetSceneToDefault {
 
 inventory::submit! { EventTermDef { name: "reset_scene_to_default", build: |_| Ok(Box::new(ResetSceneToDefault)) } }
 
+/// The root state a floating base starts in.
+fn default_root_state(desc: &ArticulationDesc) -> RootState {
+    RootState {
+        pose: desc.root_pose,
+        lin_vel: desc.root_lin_vel,
+        ang_vel: desc.root_ang_vel,
+    }
+}
+
 /// Parameters of `reset_root_state_uniform`: offsets added to the default root state.
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResetRootParams {
-    /// Rigid-object name.
+    /// Rigid-object or floating-base articulation name.
     pub asset: String,
     /// Position offset ranges `(x, y, z)` as `((lo, hi), (lo, hi), (lo, hi))`.
     #[serde(default)]
@@ -46,10 +64,17 @@ pub struct ResetRootParams {
 }
 
 /// `reset_root_state_uniform`: default root state plus uniform position, yaw and linear
-/// velocity offsets.
+/// velocity offsets, for a rigid object or a floating base.
 struct ResetRootUniform {
-    object: usize,
+    target: RootOf,
     p: ResetRootParams,
+}
+
+/// Whose root state a term writes.
+#[derive(Clone, Copy)]
+enum RootOf {
+    Object(usize),
+    Articulation(usize),
 }
 
 impl EventTerm for ResetRootUniform {
@@ -59,7 +84,10 @@ impl EventTerm for ResetRootUniform {
         env_ids: &[usize],
         rng: &mut EnvRngs,
     ) -> Result<(), EnvError> {
-        let default = scene.desc.rigid_objects[self.object].default_root_state;
+        let default = match self.target {
+            RootOf::Object(o) => scene.desc.rigid_objects[o].default_root_state,
+            RootOf::Articulation(a) => default_root_state(&scene.desc.articulations[a]),
+        };
         let states: Vec<_> = env_ids
             .iter()
             .map(|&e| {
@@ -82,17 +110,35 @@ impl EventTerm for ResetRootUniform {
                 s
             })
             .collect();
-        scene
-            .backend
-            .write_root_state(self.object, env_ids, &states)?;
+        match self.target {
+            RootOf::Object(o) => scene.backend.write_root_state(o, env_ids, &states)?,
+            RootOf::Articulation(a) => scene
+                .backend
+                .write_articulation_root_state(a, env_ids, &states)?,
+        }
         Ok(())
     }
 }
 
 inventory::submit! { EventTermDef { name: "reset_root_state_uniform", build: |c| {
     let p: ResetRootParams = c.params()?;
-    let object = c.scene.rigid_object(&format!("{}.params.asset", c.field), &p.asset)?;
-    Ok(Box::new(ResetRootUniform { object, p }))
+    let field = format!("{}.params.asset", c.field);
+    let layout = c.scene.backend.layout();
+    let target = match layout.articulation(&p.asset) {
+        Ok(a) if layout.articulations[a].fixed_base => {
+            return Err(EnvError::InvalidTerm {
+                field,
+                message: format!(
+                    "articulation `{}` has a fixed base, whose root does not move; name a rigid \
+                     object or a floating base (`fixed_base: false`)",
+                    p.asset
+                ),
+            });
+        }
+        Ok(a) => RootOf::Articulation(a),
+        Err(_) => RootOf::Object(c.scene.rigid_object(&field, &p.asset)?),
+    };
+    Ok(Box::new(ResetRootUniform { target, p }))
 } } }
 /// Parameters of `reset_joints_by_offset` / `reset_joints_by_scale`.
 #[derive(Clone, Debug, Deserialize)]
@@ -221,7 +267,7 @@ inventory::submit! { EventTermDef { name: "reset_joints_by_scale", build: |c| re
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialParams {
-    /// Rigid-object name.
+    /// Rigid-object or floating-base articulation name.
     pub asset: String,
     /// Friction coefficients are drawn uniformly from this range per env.
     pub friction_range: (f32, f32),

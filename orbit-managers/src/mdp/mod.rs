@@ -2,6 +2,7 @@
 //! kind of term, and the entity selections they share.
 
 mod actions;
+mod base_state;
 mod commands;
 mod curriculum;
 mod events;
@@ -10,6 +11,7 @@ mod rewards;
 mod terminations;
 
 pub use actions::*;
+pub use base_state::*;
 pub use commands::*;
 pub use curriculum::*;
 pub use events::*;

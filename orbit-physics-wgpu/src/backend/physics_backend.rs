@@ -3,7 +3,8 @@
 use glam::{Quat, Vec3};
 use orbit_core::physics::{
     ArticulationView, BodyRef, PhysicsBackend, PhysicsError, RigidObjectView, SceneLayout,
-    check_batch, check_dof_ids, check_env_ids, check_root_states, check_values,
+    check_batch, check_dof_ids, check_env_ids, check_floating_base, check_root_states,
+    check_values,
 };
 use orbit_core::scene::RootState;
 
@@ -198,6 +199,19 @@ impl PhysicsBackend for WgpuBackend {
         }
         let sections = [off.joint_section(0), off.joint_section(1)];
         self.after_write(env_ids, &sections)
+    }
+
+    fn write_articulation_root_state(
+        &mut self,
+        a: usize,
+        env_ids: &[usize],
+        states: &[RootState],
+    ) -> Result<(), PhysicsError> {
+        self.check_articulation(a)?;
+        check_env_ids(env_ids, self.buffers.num_envs)?;
+        check_root_states(states, env_ids.len())?;
+        // Scenes with a floating base do not compile for this backend, so every root is fixed.
+        check_floating_base(self.layout(), a)
     }
 
     fn write_root_state(

@@ -182,6 +182,26 @@ mod tests {
         assert!(!src.contains("L_PARENT") && src.contains("lpos[7]"));
     }
 
+    /// A floating base is refused, with an error naming the backend that simulates it.
+    #[test]
+    fn floating_bases_are_refused() {
+        let mut art = passive_articulation(orbit_conformance::floating_tree());
+        art.fixed_base = false;
+        let cfg = SceneCfg {
+            env_spacing: 2.0,
+            articulations: vec![art],
+            rigid_objects: vec![],
+            static_objects: vec![],
+        };
+        match CompiledScene::new(&resolve(&cfg)) {
+            Ok(_) => panic!("a floating base compiled"),
+            Err(e) => {
+                let e = e.to_string();
+                assert!(e.contains("floating base") && e.contains("rapier"), "{e}");
+            }
+        }
+    }
+
     #[test]
     fn kernels_of_small_scenes_are_valid_wgsl() {
         let init = RootStateCfg {
