@@ -11,6 +11,7 @@
 //! - velocity limits clamp the joint speed after each step (PhysX's max joint velocity);
 //! - bias forces are computed by recursive Newton–Euler on the same model.
 
+mod build;
 mod env_world;
 mod hooks;
 
