@@ -113,12 +113,7 @@ impl EnvWorld {
         }
         for (a, desc) in scene.articulations.iter().enumerate() {
             if !desc.fixed_base {
-                let root = RootState {
-                    pose: desc.root_pose,
-                    lin_vel: desc.root_lin_vel,
-                    ang_vel: desc.root_ang_vel,
-                };
-                env.write_articulation_root_state(a, &root);
+                env.write_articulation_root_state(a, &desc.default_root_state());
             }
             env.write_joint_state(a, &desc.default_joint_pos, &desc.default_joint_vel);
         }
@@ -143,12 +138,9 @@ impl EnvWorld {
             .multibody_joints
             .get_multibody(art.multibody)
             .expect("multibody exists");
-        let vel = mb.generalized_velocity();
         let out = &mut art.out;
+        joint_state(mb, &art.dof_mb_link, &art.dof_axis, &mut out.q, &mut out.qd);
         for d in 0..out.q.len() {
-            let link = mb.link(art.dof_mb_link[d]).expect("link exists");
-            out.q[d] = link.joint().coords()[art.dof_axis[d]];
-            out.qd[d] = vel[link.assembly_id()];
             let dr = &drives[d];
             // `out.bias` still holds the step's starting state (recomputed below).
             let tau = dr.stiffness * (input.pos_target[d] - out.q[d])
@@ -211,10 +203,21 @@ impl EnvWorld {
     fn sync_link_velocities(&mut self, a: usize) {
         let root = self.read_articulation_root_state(a);
         let (mut q, mut qd) = ([0.0f32; MAX_DOFS], [0.0f32; MAX_DOFS]);
-        let n = self.arts[a].dof_link.len();
-        self.read_joint_state(a, &mut q[..n], &mut qd[..n]);
-        let (q, qd) = (&q[..n], &qd[..n]);
         let art = &mut self.arts[a];
+        let n = art.dof_link.len();
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody(art.multibody)
+            .expect("multibody exists");
+        joint_state(
+            mb,
+            &art.dof_mb_link,
+            &art.dof_axis,
+            &mut q[..n],
+            &mut qd[..n],
+        );
+        let (q, qd) = (&q[..n], &qd[..n]);
         art.root = root.pose;
         art.kin.forward(&art.root, q);
         let out = &mut art.out;
@@ -235,22 +238,6 @@ impl EnvWorld {
                 true,
             );
             rb.set_angvel(out.link_ang_vel[l], true);
-        }
-    }
-
-    /// The joint positions and velocities of articulation `a` in its multibody.
-    fn read_joint_state(&self, a: usize, q: &mut [f32], qd: &mut [f32]) {
-        let art = &self.arts[a];
-        let mb = self
-            .world
-            .multibody_joints
-            .get_multibody(art.multibody)
-            .expect("multibody exists");
-        let vel = mb.generalized_velocity();
-        for d in 0..q.len() {
-            let link = mb.link(art.dof_mb_link[d]).expect("link exists");
-            q[d] = link.joint().coords()[art.dof_axis[d]];
-            qd[d] = vel[link.assembly_id()];
         }
     }
 
@@ -493,6 +480,23 @@ impl EnvWorld {
             data = (data & !0xFFFF_FFFF) | u128::from(friction.to_bits());
             col.user_data = data;
         }
+    }
+}
+
+/// The joint positions and velocities of a multibody's dofs (each dof's multibody link and
+/// the axis of its joint's coordinates).
+fn joint_state(
+    mb: &Multibody,
+    dof_mb_link: &[usize],
+    dof_axis: &[usize],
+    q: &mut [f32],
+    qd: &mut [f32],
+) {
+    let vel = mb.generalized_velocity();
+    for d in 0..q.len() {
+        let link = mb.link(dof_mb_link[d]).expect("link exists");
+        q[d] = link.joint().coords()[dof_axis[d]];
+        qd[d] = vel[link.assembly_id()];
     }
 }
 

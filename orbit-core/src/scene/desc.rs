@@ -74,6 +74,15 @@ impl ArticulationDesc {
     pub fn num_dofs(&self) -> usize {
         self.default_joint_pos.len()
     }
+
+    /// The root state a floating base starts in (a fixed base's pose, at rest).
+    pub fn default_root_state(&self) -> RootState {
+        RootState {
+            pose: self.root_pose,
+            lin_vel: self.root_lin_vel,
+            ang_vel: self.root_ang_vel,
+        }
+    }
 }
 
 /// A resolved free rigid object.

@@ -1,6 +1,4 @@
 //! Event terms: resets of joint and root state, randomisation of materials and masses.
-use orbit_core::scene::{ArticulationDesc, RootState};
-
 use super::*;
 
 /// `reset_scene_to_default`: default joint state of every articulation, default root state of
@@ -17,12 +15,11 @@ impl EventTerm for ResetSceneToDefault {
         for a in 0..scene.desc.articulations.len() {
             let desc = &scene.desc.articulations[a];
             if !desc.fixed_base {
-                let states = vec![default_root_state(desc); env_ids.len()];
+                let states = vec![desc.default_root_state(); env_ids.len()];
                 scene
                     .backend
                     .write_articulation_root_state(a, env_ids, &states)?;
             }
-            let desc = &scene.desc.articulations[a];
             let pos = desc.default_joint_pos.repeat(env_ids.len());
             let vel = desc.default_joint_vel.repeat(env_ids.len());
             scene.backend.write_joint_state(a, env_ids, &pos, &vel)?;
@@ -36,15 +33,6 @@ impl EventTerm for ResetSceneToDefault {
 }
 
 inventory::submit! { EventTermDef { name: "reset_scene_to_default", build: |_| Ok(Box::new(ResetSceneToDefault)) } }
-
-/// The root state a floating base starts in.
-fn default_root_state(desc: &ArticulationDesc) -> RootState {
-    RootState {
-        pose: desc.root_pose,
-        lin_vel: desc.root_lin_vel,
-        ang_vel: desc.root_ang_vel,
-    }
-}
 
 /// Parameters of `reset_root_state_uniform`: offsets added to the default root state.
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -86,7 +74,7 @@ impl EventTerm for ResetRootUniform {
     ) -> Result<(), EnvError> {
         let default = match self.target {
             RootOf::Object(o) => scene.desc.rigid_objects[o].default_root_state,
-            RootOf::Articulation(a) => default_root_state(&scene.desc.articulations[a]),
+            RootOf::Articulation(a) => scene.desc.articulations[a].default_root_state(),
         };
         let states: Vec<_> = env_ids
             .iter()
@@ -267,7 +255,7 @@ inventory::submit! { EventTermDef { name: "reset_joints_by_scale", build: |c| re
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialParams {
-    /// Rigid-object or floating-base articulation name.
+    /// Rigid-object name.
     pub asset: String,
     /// Friction coefficients are drawn uniformly from this range per env.
     pub friction_range: (f32, f32),
