@@ -27,9 +27,11 @@ pub fn articulation_momentum(sim: &dyn PhysicsBackend, a: usize, e: usize) -> (V
     (p, l)
 }
 
-/// A floating tree of three links tumbling without gravity for 1 s, its joints spinning:
-/// nothing acts from outside, so its linear momentum and its angular momentum about a fixed
-/// point keep their starting values, to 2e-4 of their size.
+/// A floating tree of three links tumbling without gravity for 1 s in 2 ms steps, its joints
+/// spinning: nothing acts from outside, so its linear momentum and its angular momentum about
+/// a fixed point keep their starting values, to 1e-3 of their size. Semi-implicit Euler
+/// conserves them only to first order in the step; the drift of a wrong bias force would not
+/// shrink with the step (docs/fidelity.md).
 pub fn free_flight_momentum(backend: &str) {
     let mut art = passive_articulation(floating_tree());
     art.fixed_base = false;
@@ -65,9 +67,9 @@ pub fn free_flight_momentum(backend: &str) {
         "free_flight_momentum[{backend}]: p0 {p0:?}, l0 {l0:?}; largest drift {dp:.2e} (linear), \
          {dl:.2e} (angular)"
     );
-    assert!(dp < 2e-4, "linear momentum drifted by {dp:.2e} of its size");
+    assert!(dp < 1e-3, "linear momentum drifted by {dp:.2e} of its size");
     assert!(
-        dl < 2e-4,
+        dl < 1e-3,
         "angular momentum drifted by {dl:.2e} of its size"
     );
 }

@@ -236,10 +236,9 @@ pub fn ground(friction: f32) -> StaticObjectCfg {
     }
 }
 
-/// The bundled Ant (`ant.xml`) as a floating base at `height`, its joints starting at
-/// `joint_pos` (by name) and held there by stiff drives (stiffness 1 000 N·m/rad, damping
-/// 10 N·m·s/rad).
-pub fn standing_ant(height: f32, joint_pos: &[(&str, f32)]) -> ArticulationCfg {
+/// The bundled Ant (`ant.xml`) as a floating base without actuators (its joints take efforts),
+/// starting at the origin.
+pub fn floating_ant() -> ArticulationCfg {
     let mut ant = passive_articulation(ArticulationModel {
         name: "ant".into(),
         links: vec![],
@@ -248,6 +247,14 @@ pub fn standing_ant(height: f32, joint_pos: &[(&str, f32)]) -> ArticulationCfg {
         path: "ant.xml".into(),
     };
     ant.fixed_base = false;
+    ant
+}
+
+/// The bundled Ant (`ant.xml`) as a floating base at `height`, its joints starting at
+/// `joint_pos` (by name) and held there by stiff drives (stiffness 1 000 N·m/rad, damping
+/// 10 N·m·s/rad).
+pub fn standing_ant(height: f32, joint_pos: &[(&str, f32)]) -> ArticulationCfg {
+    let mut ant = floating_ant();
     ant.init_state.pos = Vec3::new(0.0, 0.0, height);
     ant.init_state.joint_pos = joint_pos.iter().map(|&(n, q)| (n.into(), q)).collect();
     ant.actuators.insert(

@@ -10,8 +10,9 @@ use orbit_core::scene::{Geometry, Inertial, JointKind, SceneDesc, Shape};
 
 use crate::BACKEND_NAME;
 
-/// Largest number of degrees of freedom (all articulations of an env together): the kernel
-/// keeps the dense `n × n` system matrix in registers and local memory.
+/// Largest number of degrees of freedom (all articulations of an env together, six for each
+/// floating base): the kernel keeps the dense `n × n` system matrix in registers and local
+/// memory.
 pub const MAX_DOFS: usize = 16;
 /// Largest number of links (all articulations of an env together).
 pub const MAX_LINKS: usize = 32;
@@ -42,9 +43,13 @@ pub struct LinkData {
     pub parent: Option<usize>,
     /// Dof of the joint to the parent (global index), `None` for a root.
     pub dof: Option<usize>,
-    /// Joint kind (`Fixed` only for roots, which are welded to the env frame).
+    /// For the root of a floating base: its index among the scene's floating roots and its
+    /// first dof (the six root dofs, see [`DofData::root_axis`]); `None` for every other link.
+    pub free_root: Option<FreeRoot>,
+    /// Joint kind (`Fixed` for roots).
     pub kind: JointKind,
-    /// Joint frame in the parent link (for a root: the root pose in the env frame).
+    /// Joint frame in the parent link (for a root: the root pose in the env frame, the initial
+    /// one for a floating base).
     pub origin: Pose,
     /// Joint axis in the joint (= child link) frame.
     pub axis: Vec3,
@@ -52,9 +57,52 @@ pub struct LinkData {
     pub inertial: Inertial,
 }
 
+/// The root link of a floating base.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreeRoot {
+    /// Index among the scene's floating roots (the kernel's root state arrays).
+    pub index: usize,
+    /// First of its six dofs.
+    pub dof0: usize,
+}
+
+/// One articulation's block of the link forest and of the dofs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArticulationBlock {
+    /// First link (global index).
+    pub link0: usize,
+    /// Links.
+    pub links: usize,
+    /// First dof (global index): the six root dofs of a floating base come first.
+    pub dof0: usize,
+    /// Dofs, root dofs included: the block of the system matrix.
+    pub dofs: usize,
+    /// Whether the base floats (six root dofs before the joints').
+    pub floating: bool,
+}
+
+impl ArticulationBlock {
+    /// First joint dof (global index).
+    pub fn joint_dof0(&self) -> usize {
+        self.dof0 + self.root_dofs()
+    }
+
+    /// Joint dofs: what the state buffer and the batched views hold per env.
+    pub fn joint_dofs(&self) -> usize {
+        self.dofs - self.root_dofs()
+    }
+
+    fn root_dofs(&self) -> usize {
+        if self.floating { 6 } else { 0 }
+    }
+}
+
 /// A degree of freedom and its drive.
 #[derive(Clone, Debug)]
 pub struct DofData {
+    /// `None` for a joint; for a floating base's root, its axis: 0–2 the velocity of the root
+    /// link's centre of mass along env x, y, z, 3–5 the root's angular velocity about them.
+    pub root_axis: Option<usize>,
     /// Rotor inertia added to the mass-matrix diagonal.
     pub armature: f32,
     /// Viscous joint damping.
@@ -71,6 +119,23 @@ pub struct DofData {
     pub lower: f32,
     /// Upper position limit.
     pub upper: f32,
+}
+
+impl DofData {
+    /// Root dof `axis` of a floating base: no drive, no damping, no limits.
+    fn root(axis: usize) -> Self {
+        Self {
+            root_axis: Some(axis),
+            armature: 0.0,
+            damping: 0.0,
+            stiffness: 0.0,
+            drive_damping: 0.0,
+            effort_limit: f32::INFINITY,
+            velocity_limit: f32::INFINITY,
+            lower: f32::NEG_INFINITY,
+            upper: f32::INFINITY,
+        }
+    }
 }
 
 /// What a shape is to the narrow phase.
@@ -172,8 +237,8 @@ pub struct GeometryTable {
 pub struct CompiledScene {
     /// Links of all articulations, each articulation's links contiguous, parents first.
     pub links: Vec<LinkData>,
-    /// Per articulation: `(first link, links, first dof, dofs)`.
-    pub articulations: Vec<(usize, usize, usize, usize)>,
+    /// Per articulation: its links and dofs.
+    pub articulations: Vec<ArticulationBlock>,
     /// All dofs.
     pub dofs: Vec<DofData>,
     /// Free rigid objects' mass properties.
@@ -184,14 +249,16 @@ pub struct CompiledScene {
     pub pairs: Vec<PairData>,
 }
 
-/// Whether body `b` is the root link of an articulation (welded to the env frame).
-fn is_root_link(links: &[LinkData], b: usize) -> bool {
-    links.get(b).is_some_and(|l| l.parent.is_none())
+/// Whether body `b` is the root link of a fixed base (welded to the env frame).
+fn is_fixed_root(links: &[LinkData], b: usize) -> bool {
+    links
+        .get(b)
+        .is_some_and(|l| l.parent.is_none() && l.free_root.is_none())
 }
 
-/// Whether a shape never moves: static, or on a root link.
+/// Whether a shape never moves: static, or on the root link of a fixed base.
 fn never_moves(links: &[LinkData], shape: &ShapeData) -> bool {
-    shape.body.is_none_or(|b| is_root_link(links, b))
+    shape.body.is_none_or(|b| is_fixed_root(links, b))
 }
 
 fn unsupported(reason: String) -> PhysicsError {
@@ -260,15 +327,18 @@ impl CompiledScene {
         // (articulation, shape filter) per shape, for pair filtering.
         let mut shape_filters = Vec::new();
         let mut shape_art: Vec<Option<usize>> = Vec::new();
+        let mut free_roots = 0;
         for (ai, art) in scene.articulations.iter().enumerate() {
-            if !art.fixed_base {
-                return Err(unsupported(format!(
-                    "articulation `{}` has a floating base, which this backend does not simulate \
-                     yet; use `sim.backend: \"rapier\"` (or `--backend rapier`)",
-                    art.name
-                )));
-            }
             let (link0, dof0) = (links.len(), dofs.len());
+            let free_root = (!art.fixed_base).then(|| {
+                free_roots += 1;
+                dofs.extend((0..6).map(DofData::root));
+                FreeRoot {
+                    index: free_roots - 1,
+                    dof0,
+                }
+            });
+            let joint0 = dofs.len();
             for (li, link) in art.model.links.iter().enumerate() {
                 let global = link0 + li;
                 let (parent, dof, kind, origin, axis) = match (&link.joint, link.parent) {
@@ -287,7 +357,7 @@ impl CompiledScene {
                     _ => (None, None, JointKind::Fixed, art.root_pose, Vec3::Z),
                 };
                 if let (Some(d), Some(j)) = (dof, &link.joint) {
-                    let drive = &art.drives[d - dof0];
+                    let drive = &art.drives[d - joint0];
                     let [lower, upper] = j.limits.unwrap_or([f32::NEG_INFINITY, f32::INFINITY]);
                     if j.friction != 0.0 {
                         return Err(unsupported(format!(
@@ -296,6 +366,7 @@ impl CompiledScene {
                         )));
                     }
                     dofs.push(DofData {
+                        root_axis: None,
                         armature: j.armature,
                         damping: j.damping,
                         stiffness: drive.stiffness,
@@ -309,6 +380,7 @@ impl CompiledScene {
                 links.push(LinkData {
                     parent,
                     dof,
+                    free_root: free_root.filter(|_| li == 0),
                     kind,
                     origin,
                     axis,
@@ -324,7 +396,13 @@ impl CompiledScene {
                     shape_art.push(Some(ai));
                 }
             }
-            articulations.push((link0, links.len() - link0, dof0, dofs.len() - dof0));
+            articulations.push(ArticulationBlock {
+                link0,
+                links: links.len() - link0,
+                dof0,
+                dofs: dofs.len() - dof0,
+                floating: !art.fixed_base,
+            });
         }
         let num_links = links.len();
         if num_links > MAX_LINKS || dofs.len() > MAX_DOFS {
@@ -412,9 +490,17 @@ impl CompiledScene {
     }
 
     /// Whether body `b` (a link, or `num_links + o` for a free object) never moves: the root
-    /// link of an articulation, welded to the env frame.
+    /// link of a fixed base, welded to the env frame.
     pub fn is_fixed_body(&self, b: usize) -> bool {
-        is_root_link(&self.links, b)
+        is_fixed_root(&self.links, b)
+    }
+
+    /// The floating roots' links, in the order of their [`FreeRoot::index`].
+    pub fn free_roots(&self) -> impl Iterator<Item = (usize, FreeRoot)> + '_ {
+        self.links
+            .iter()
+            .enumerate()
+            .filter_map(|(l, link)| Some((l, link.free_root?)))
     }
 
     /// A sphere in body `b`'s frame that holds all of its shapes: `(centre, radius)`.

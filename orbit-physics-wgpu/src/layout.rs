@@ -70,6 +70,18 @@ impl ArticulationOffsets {
     pub fn joint_section(&self, k: usize) -> (usize, usize) {
         (self.joints + k * self.joint_len, self.dofs)
     }
+
+    /// The link state sections (positions, quaternions, linear and angular velocities) as
+    /// `(first float, floats per env)`.
+    pub fn link_sections(&self) -> [(usize, usize); 4] {
+        let (l3, l4) = (3 * self.links, 4 * self.links);
+        [
+            (self.link_pos, l3),
+            (self.link_quat, l4),
+            (self.link_lin, l3),
+            (self.link_ang, l3),
+        ]
+    }
 }
 
 impl ObjectOffsets {
@@ -117,7 +129,8 @@ impl BufferLayout {
         let mut state = 0;
         let mut inputs = 0;
         let mut articulations = Vec::new();
-        for &(_, links, _, dofs) in &scene.articulations {
+        for b in &scene.articulations {
+            let (links, dofs) = (b.links, b.joint_dofs());
             let joint_len = pad4(n * dofs);
             let joints = state;
             state += 4 * joint_len;
@@ -178,13 +191,7 @@ impl BufferLayout {
         let mut sections = Vec::new();
         for a in &self.articulations {
             sections.extend((0..4).map(|k| a.joint_section(k)));
-            let (l3, l4) = (3 * a.links, 4 * a.links);
-            sections.extend([
-                (a.link_pos, l3),
-                (a.link_quat, l4),
-                (a.link_lin, l3),
-                (a.link_ang, l3),
-            ]);
+            sections.extend(a.link_sections());
         }
         for o in &self.objects {
             sections.extend(o.sections());
@@ -203,20 +210,24 @@ impl BufferLayout {
             self.fresh as u32,
             self.compensate as u32,
         ];
-        let arts = scene.articulations.iter().enumerate();
+        // One entry per dof of the kernel; a floating root's dofs are not in the state buffer
+        // and get 0.
         let per_dof = |f: &dyn Fn(&ArticulationOffsets, usize) -> usize| -> Vec<u32> {
-            arts.clone()
-                .flat_map(|(a, &(_, _, _, dofs))| (0..dofs).map(move |i| (a, i)))
-                .map(|(a, i)| f(&self.articulations[a], i) as u32)
-                .collect()
+            let mut out = vec![0; scene.dofs.len()];
+            for (a, b) in scene.articulations.iter().enumerate() {
+                for i in 0..b.joint_dofs() {
+                    out[b.joint_dof0() + i] = f(&self.articulations[a], i) as u32;
+                }
+            }
+            out
         };
         t.extend(per_dof(&|o, i| o.joints + i));
         t.extend(per_dof(&|o, _| o.joint_len));
         t.extend(per_dof(&|o, i| o.inputs + i));
-        for (a, &(_, links, _, _)) in scene.articulations.iter().enumerate() {
+        for (a, b) in scene.articulations.iter().enumerate() {
             t.extend(std::iter::repeat_n(
                 self.articulations[a].link_pos as u32,
-                links,
+                b.links,
             ));
         }
         t.extend(self.objects.iter().map(|o| o.pos as u32));

@@ -1,4 +1,5 @@
-//! Inverse weights at the reference configuration (all joints at 0): MuJoCo's
+//! Inverse weights at the reference configuration (all joints at 0, a floating root at its
+//! initial pose): MuJoCo's
 //! `body_invweight0` (translational part) and `dof_invweight0`. MuJoCo scales a soft
 //! constraint's regulariser by these fixed numbers rather than by the row's exact
 //! `J M⁻¹ Jᵀ` (see `normal_row` in step.wgsl), so the contact softness does not change as the
@@ -42,6 +43,15 @@ impl InverseWeights {
             let mut jr = vec![DVec3::ZERO; nd];
             let mut at = Some(k);
             while let Some(i) = at {
+                if let Some(root) = links[i].free_root {
+                    // Translations of the root's centre of mass, rotations about it.
+                    let c = poses[i].transform_point(links[i].inertial.com).as_dvec3();
+                    for (k, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
+                        jp[root.dof0 + k] = e;
+                        jp[root.dof0 + 3 + k] = e.cross(point - c);
+                        jr[root.dof0 + 3 + k] = e;
+                    }
+                }
                 if let Some(d) = links[i].dof {
                     let s = (poses[i].rot * links[i].axis).as_dvec3();
                     match links[i].kind {

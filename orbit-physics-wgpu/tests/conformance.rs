@@ -151,3 +151,38 @@ fn substeps_after_a_write_do_not_depend_on_dispatch() {
         orbit_conformance::substeps_after_a_write_do_not_depend_on_dispatch(BACKEND_NAME);
     }
 }
+
+#[test]
+fn free_flight_momentum() {
+    if gpu_available() {
+        orbit_conformance::free_flight_momentum(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn floating_root_writes() {
+    if gpu_available() {
+        orbit_conformance::floating_root_writes(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn ant_standing_height() {
+    if gpu_available() {
+        orbit_conformance::ant_standing_height(BACKEND_NAME);
+    }
+}
+
+#[test]
+fn ant_tracks_mujoco_rollout() {
+    if gpu_available() {
+        // The kernel steps as MuJoCo's Euler integrator does (joint damping implicit): what
+        // remains is single-precision rounding.
+        let tolerance = orbit_conformance::StateError {
+            root_pos: 1e-5,
+            root_rot: 1e-5,
+            joint_pos: 1e-5,
+        };
+        orbit_conformance::ant_tracks_mujoco_rollout(BACKEND_NAME, tolerance);
+    }
+}

@@ -10,6 +10,7 @@ use orbit_core::scene::RootState;
 
 use super::WgpuBackend;
 use crate::BACKEND_NAME;
+use crate::compile::ArticulationBlock;
 use crate::layout;
 
 impl WgpuBackend {
@@ -42,7 +43,7 @@ impl WgpuBackend {
     fn body_index(&self, body: BodyRef) -> Result<usize, PhysicsError> {
         match body {
             BodyRef::Link { articulation, link } => {
-                let &(first, links, _, _) =
+                let &ArticulationBlock { link0, links, .. } =
                     self.scene.articulations.get(articulation).ok_or_else(|| {
                         PhysicsError::InvalidInput(format!(
                             "articulation index {articulation} out of range"
@@ -53,7 +54,7 @@ impl WgpuBackend {
                         "link index {link} out of range ({links} links)"
                     )));
                 }
-                Ok(first + link)
+                Ok(link0 + link)
             }
             BodyRef::RigidObject(o) => {
                 if o >= self.scene.objects.len() {
@@ -170,7 +171,7 @@ impl PhysicsBackend for WgpuBackend {
         enabled: bool,
     ) -> Result<(), PhysicsError> {
         check_dof_ids(dofs, self.check_articulation(a)?.dofs)?;
-        let first = self.scene.articulations[a].2;
+        let first = self.scene.articulations[a].joint_dof0();
         for &d in dofs {
             self.inputs[self.buffers.compensate + first + d] = if enabled { 1.0 } else { 0.0 };
         }
@@ -207,11 +208,13 @@ impl PhysicsBackend for WgpuBackend {
         env_ids: &[usize],
         states: &[RootState],
     ) -> Result<(), PhysicsError> {
-        self.check_articulation(a)?;
+        let off = self.check_articulation(a)?;
+        check_floating_base(self.layout(), a)?;
         check_env_ids(env_ids, self.buffers.num_envs)?;
         check_root_states(states, env_ids.len())?;
-        // Scenes with a floating base do not compile for this backend, so every root is fixed.
-        check_floating_base(self.layout(), a)
+        self.put_articulation_root_states(a, env_ids, states);
+        // The whole link rows: the republish recomputes the other links from the root.
+        self.after_write(env_ids, &off.link_sections())
     }
 
     fn write_root_state(

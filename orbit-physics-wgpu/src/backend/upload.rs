@@ -24,6 +24,12 @@ impl WgpuBackend {
                 }
             }
         }
+        let all: Vec<usize> = (0..n).collect();
+        for (a, art) in desc.articulations.iter().enumerate() {
+            if !art.fixed_base {
+                self.put_articulation_root_states(a, &all, &vec![art.default_root_state(); n]);
+            }
+        }
         for (o, obj) in desc.rigid_objects.iter().enumerate() {
             let states = vec![obj.default_root_state; n];
             self.put_root_states(o, &(0..n).collect::<Vec<_>>(), &states);
@@ -42,14 +48,37 @@ impl WgpuBackend {
 
     pub(super) fn put_root_states(&mut self, o: usize, env_ids: &[usize], states: &[RootState]) {
         let off = self.buffers.objects[o].clone();
-        let s = self.state_f32_mut();
-        for (&e, st) in env_ids.iter().zip(states) {
-            s[off.pos + e * 3..off.pos + e * 3 + 3].copy_from_slice(&st.pose.pos.to_array());
-            s[off.quat + e * 4..off.quat + e * 4 + 4]
-                .copy_from_slice(&st.pose.rot.normalize().to_array());
-            s[off.lin + e * 3..off.lin + e * 3 + 3].copy_from_slice(&st.lin_vel.to_array());
-            s[off.ang + e * 3..off.ang + e * 3 + 3].copy_from_slice(&st.ang_vel.to_array());
-        }
+        let rows = env_ids.iter().map(|&e| {
+            [
+                off.pos + e * 3,
+                off.quat + e * 4,
+                off.lin + e * 3,
+                off.ang + e * 3,
+            ]
+        });
+        put_rows(self.state_f32_mut(), rows, states);
+    }
+
+    /// Writes root states into the rows of articulation `a`'s root link (its first link), the
+    /// state a floating base's kernel starts from.
+    pub(super) fn put_articulation_root_states(
+        &mut self,
+        a: usize,
+        env_ids: &[usize],
+        states: &[RootState],
+    ) {
+        let off = self.buffers.articulations[a].clone();
+        let links = off.links;
+        let rows = env_ids.iter().map(|&e| {
+            let k = e * links;
+            [
+                off.link_pos + 3 * k,
+                off.link_quat + 4 * k,
+                off.link_lin + 3 * k,
+                off.link_ang + 3 * k,
+            ]
+        });
+        put_rows(self.state_f32_mut(), rows, states);
     }
 
     pub(super) fn upload_state(&self) {
@@ -114,5 +143,16 @@ impl WgpuBackend {
     pub(super) fn mark_env_rows(&mut self, section: usize, per_env: usize, env_ids: &[usize]) {
         self.dirty
             .extend(layout::env_rows(section, per_env, env_ids));
+    }
+}
+
+/// Writes each root state at its row's `[position, quaternion, linear velocity, angular
+/// velocity]` offsets (the quaternion normalised).
+fn put_rows(s: &mut [f32], rows: impl Iterator<Item = [usize; 4]>, states: &[RootState]) {
+    for ([pos, quat, lin, ang], st) in rows.zip(states) {
+        s[pos..pos + 3].copy_from_slice(&st.pose.pos.to_array());
+        s[quat..quat + 4].copy_from_slice(&st.pose.rot.normalize().to_array());
+        s[lin..lin + 3].copy_from_slice(&st.lin_vel.to_array());
+        s[ang..ang + 3].copy_from_slice(&st.ang_vel.to_array());
     }
 }

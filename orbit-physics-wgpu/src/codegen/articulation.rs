@@ -6,17 +6,32 @@ use std::fmt::Write as _;
 use orbit_core::scene::JointKind;
 
 use super::{Gen, f, m3, q4, v3};
+use crate::compile::FreeRoot;
 
 impl Gen<'_> {
     /// Forward kinematics, joint motion subspaces, link velocities and spatial inertias.
     pub(super) fn kinematics(&mut self) {
+        let roots: Vec<(usize, FreeRoot)> = self.scene.free_roots().collect();
+        if !roots.is_empty() {
+            self.line(
+                "// Floating roots: the root link's centre of mass (its orientation is in lrot).",
+            );
+            self.line(format!(
+                "var<private> fcom: array<vec3<f32>, {}>;",
+                roots.len()
+            ));
+        }
         self.line(
             "// Forward kinematics, joint motion subspaces, link spatial inertias and velocities.",
         );
         self.open("fn kinematics()");
         for (l, link) in self.scene.links.iter().enumerate() {
             let Some(p) = link.parent else {
-                // A root is welded to the env frame: a constant pose, at rest.
+                if let Some(root) = link.free_root {
+                    self.floating_root_kinematics(l, root);
+                    continue;
+                }
+                // A fixed root is welded to the env frame: a constant pose, at rest.
                 self.line(format!("lpos[{l}] = {};", v3(link.origin.pos)));
                 self.line(format!("lrot[{l}] = {};", q4(link.origin.rot)));
                 self.line(format!("vw[{l}] = vec3<f32>(0.0);"));
@@ -50,42 +65,64 @@ impl Gen<'_> {
             self.line(format!("lrot[{l}] = rot;"));
             self.line(format!("vw[{l}] = vw[{p}] + sw[{l}] * qd[{d}];"));
             self.line(format!("vu[{l}] = vu[{p}] + su[{l}] * qd[{d}];"));
-            self.line("// Spatial inertia at the env origin.");
-            let i = &link.inertial;
-            self.line(format!("let s = mscale[{l}];"));
-            self.line(format!("let m = {} * s;", f(i.mass)));
-            self.line(format!("let c = pos + qrot(rot, {});", v3(i.com)));
-            self.line("let r = qmat(rot);");
-            self.line(format!(
-                "let ic = r * ({} * s) * transpose(r);",
-                m3(i.inertia)
-            ));
-            self.line("let cc = dot(c, c);");
-            self.line(format!("im[{l}] = m;"));
-            self.line(format!("ih[{l}] = m * c;"));
-            self.line(format!(
-                "ij[{l}] = ic + m * (mat3x3<f32>(cc, 0.0, 0.0, 0.0, cc, 0.0, 0.0, 0.0, cc) - outer(c, c));"
-            ));
+            self.spatial_inertia(l);
             self.close();
         }
         self.close();
         self.line("");
     }
 
-    /// Non-root links with their parent (`None` when the parent is a root) and dof.
-    fn moving_links(&self) -> Vec<(usize, Option<usize>, usize)> {
+    /// A floating root: its origin from the integrated centre of mass and orientation, its
+    /// velocity from the six root dofs.
+    fn floating_root_kinematics(&mut self, l: usize, root: FreeRoot) {
+        let link = &self.scene.links[l];
+        let (v, w) = Self::root_velocity(root);
+        self.open("");
+        self.line(format!("let rot = lrot[{l}];"));
+        self.line(format!(
+            "let pos = fcom[{}] - qrot(rot, {});",
+            root.index,
+            v3(link.inertial.com)
+        ));
+        self.line(format!("lpos[{l}] = pos;"));
+        self.line(format!("vw[{l}] = {w};"));
+        self.line(format!(
+            "vu[{l}] = {v} + cross(fcom[{}], vw[{l}]);",
+            root.index
+        ));
+        self.spatial_inertia(l);
+        self.close();
+    }
+
+    /// Link `l`'s spatial inertia at the env origin, from `pos` and `rot` in scope.
+    fn spatial_inertia(&mut self, l: usize) {
+        self.line("// Spatial inertia at the env origin.");
+        let i = &self.scene.links[l].inertial;
+        self.line(format!("let s = mscale[{l}];"));
+        self.line(format!("let m = {} * s;", f(i.mass)));
+        self.line(format!("let c = pos + qrot(rot, {});", v3(i.com)));
+        self.line("let r = qmat(rot);");
+        self.line(format!(
+            "let ic = r * ({} * s) * transpose(r);",
+            m3(i.inertia)
+        ));
+        self.line("let cc = dot(c, c);");
+        self.line(format!("im[{l}] = m;"));
+        self.line(format!("ih[{l}] = m * c;"));
+        self.line(format!(
+            "ij[{l}] = ic + m * (mat3x3<f32>(cc, 0.0, 0.0, 0.0, cc, 0.0, 0.0, 0.0, cc) - outer(c, c));"
+        ));
+    }
+
+    /// Links with inertia that moves (all but fixed roots), parents first, with their parent
+    /// when it is one of them and their dofs.
+    fn moving_links(&self) -> Vec<(usize, Option<usize>, Vec<usize>)> {
         let links = &self.scene.links;
-        links
-            .iter()
-            .enumerate()
-            .filter_map(|(l, link)| {
-                let p = link.parent?;
-                let moving_parent = links[p].parent.is_some().then_some(p);
-                Some((
-                    l,
-                    moving_parent,
-                    link.dof.expect("non-root links have a dof"),
-                ))
+        (0..links.len())
+            .filter(|&l| !self.scene.is_fixed_body(l))
+            .map(|l| {
+                let moving_parent = links[l].parent.filter(|&p| !self.scene.is_fixed_body(p));
+                (l, moving_parent, self.link_dofs(l))
             })
             .collect()
     }
@@ -96,18 +133,28 @@ impl Gen<'_> {
         self.line("// Bias forces c(q, q̇) by recursive Newton–Euler with q̈ = 0 (gravity as a base acceleration).");
         self.open("fn rnea_bias()");
         let moving = self.moving_links();
-        for &(l, p, d) in &moving {
-            let (aw0, au0) = match p {
-                Some(p) => (format!("aw{p}"), format!("au{p}")),
-                None => ("vec3<f32>(0.0)".into(), "-GRAVITY".into()),
-            };
-            self.line("// (v × S) q̇ with the motion cross product; f = I a + v ×* (I v).");
-            self.line(format!(
-                "let aw{l} = {aw0} + cross(vw[{l}], sw[{l}]) * qd[{d}];"
-            ));
-            self.line(format!(
-                "let au{l} = {au0} + (cross(vw[{l}], su[{l}]) + cross(vu[{l}], sw[{l}])) * qd[{d}];"
-            ));
+        for (l, p, dofs) in &moving {
+            let l = *l;
+            if let Some(root) = self.scene.links[l].free_root {
+                // The root's axes stay with the env while its centre of mass moves at v:
+                // Ṡ q̇ = (0, v × ω).
+                let (v, _) = Self::root_velocity(root);
+                self.line(format!("let aw{l} = vec3<f32>(0.0);"));
+                self.line(format!("let au{l} = -GRAVITY + cross({v}, vw[{l}]);"));
+            } else {
+                let d = dofs[0];
+                let (aw0, au0) = match p {
+                    Some(p) => (format!("aw{p}"), format!("au{p}")),
+                    None => ("vec3<f32>(0.0)".into(), "-GRAVITY".into()),
+                };
+                self.line("// (v × S) q̇ with the motion cross product; f = I a + v ×* (I v).");
+                self.line(format!(
+                    "let aw{l} = {aw0} + cross(vw[{l}], sw[{l}]) * qd[{d}];"
+                ));
+                self.line(format!(
+                    "let au{l} = {au0} + (cross(vw[{l}], su[{l}]) + cross(vu[{l}], sw[{l}])) * qd[{d}];"
+                ));
+            }
             self.line(format!(
                 "let ivw{l} = ij[{l}] * vw[{l}] + cross(ih[{l}], vu[{l}]);"
             ));
@@ -121,10 +168,11 @@ impl Gen<'_> {
                 "var fu{l} = im[{l}] * au{l} - cross(ih[{l}], aw{l}) + cross(vw[{l}], ivu{l});"
             ));
         }
-        for &(l, p, d) in moving.iter().rev() {
-            self.line(format!(
-                "bias[{d}] = dot(sw[{l}], fw{l}) + dot(su[{l}], fu{l});"
-            ));
+        for (l, p, dofs) in moving.iter().rev() {
+            for &d in dofs {
+                let (sw, su) = self.motion(d);
+                self.line(format!("bias[{d}] = dot({sw}, fw{l}) + dot({su}, fu{l});"));
+            }
             if let Some(p) = p {
                 self.line(format!("fw{p} = fw{p} + fw{l};"));
                 self.line(format!("fu{p} = fu{p} + fu{l};"));
@@ -139,12 +187,12 @@ impl Gen<'_> {
         self.line("// Joint-space mass matrix (lower triangle) by the composite-rigid-body algorithm, plus armature.");
         self.open("fn crba()");
         let moving = self.moving_links();
-        for &(l, _, _) in &moving {
+        for (l, _, _) in &moving {
             self.line(format!("var cm{l} = im[{l}];"));
             self.line(format!("var ch{l} = ih[{l}];"));
             self.line(format!("var cj{l} = ij[{l}];"));
         }
-        for &(l, p, _) in moving.iter().rev() {
+        for (l, p, _) in moving.iter().rev() {
             if let Some(p) = p {
                 self.line(format!("cm{p} = cm{p} + cm{l};"));
                 self.line(format!("ch{p} = ch{p} + ch{l};"));
@@ -153,19 +201,27 @@ impl Gen<'_> {
         }
         let nd = self.nd();
         let mut set = vec![false; nd * nd];
-        for &(l, _, di) in &moving {
-            self.line(format!(
-                "let fw{l} = cj{l} * sw[{l}] + cross(ch{l}, su[{l}]);"
-            ));
-            self.line(format!(
-                "let fu{l} = cm{l} * su[{l}] - cross(ch{l}, sw[{l}]);"
-            ));
-            for (j, dj) in self.chain(l) {
-                self.line(format!(
-                    "amat[{}] = dot(sw[{j}], fw{l}) + dot(su[{j}], fu{l});",
-                    di * nd + dj
-                ));
-                set[di * nd + dj] = true;
+        for (l, _, dofs) in &moving {
+            let l = *l;
+            let floating = dofs.len() > 1;
+            for &di in dofs {
+                // F = I_c S of this dof; a floating root's six get a suffix each.
+                let name = if floating {
+                    format!("{l}_{}", di - dofs[0])
+                } else {
+                    l.to_string()
+                };
+                let (sw, su) = self.motion(di);
+                self.line(format!("let fw{name} = cj{l} * {sw} + cross(ch{l}, {su});"));
+                self.line(format!("let fu{name} = cm{l} * {su} - cross(ch{l}, {sw});"));
+                for dj in self.chain(l).into_iter().filter(|&dj| dj <= di) {
+                    let (swj, suj) = self.motion(dj);
+                    self.line(format!(
+                        "amat[{}] = dot({swj}, fw{name}) + dot({suj}, fu{name});",
+                        di * nd + dj
+                    ));
+                    set[di * nd + dj] = true;
+                }
             }
         }
         // Dofs of one articulation off each other's chain: structural zeros of the factor's
@@ -248,6 +304,11 @@ impl Gen<'_> {
         self.open("fn drives()");
         self.line("var dv: array<f32, ND1>;");
         for (d, dof) in self.scene.dofs.iter().enumerate() {
+            if dof.root_axis.is_some() {
+                // A floating root has no drive: only the bias forces act on it.
+                self.line(format!("dv[{d}] = -DT * bias[{d}];"));
+                continue;
+            }
             let (k, dd, lim, damp) = (
                 dof.stiffness,
                 dof.drive_damping,

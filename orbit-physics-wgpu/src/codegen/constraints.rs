@@ -52,9 +52,10 @@ impl Gen<'_> {
                 continue;
             }
             self.open(format!("case {l}:"));
-            for (k, d) in chain {
+            for dof in chain {
+                let (sw, su) = self.motion(dof);
                 self.line(format!(
-                    "(*jt)[{d}] += s * (dot(d, su[{k}]) + dot(sw[{k}], pd));"
+                    "(*jt)[{dof}] += s * (dot(d, {su}) + dot({sw}, pd));"
                 ));
             }
             self.line("return true;");

@@ -24,7 +24,7 @@ mod state_io;
 use glam::{Mat3, Quat, Vec3};
 use orbit_core::physics::SimCfg;
 
-use crate::compile::CompiledScene;
+use crate::compile::{ArticulationBlock, CompiledScene, FreeRoot};
 
 /// The full WGSL source of the step kernel for `scene`, with `workgroup` invocations per
 /// workgroup.
@@ -86,27 +86,75 @@ impl Gen<'_> {
         self.scene.dofs.len()
     }
 
-    /// The articulation `(first dof, dofs)` that dof `d` belongs to.
-    fn dof_block(&self, d: usize) -> (usize, usize) {
+    /// The articulation that dof `d` belongs to.
+    fn block(&self, d: usize) -> &ArticulationBlock {
         self.scene
             .articulations
             .iter()
-            .find(|&&(_, _, d0, n)| (d0..d0 + n).contains(&d))
-            .map(|&(_, _, d0, n)| (d0, n))
+            .find(|b| (b.dof0..b.dof0 + b.dofs).contains(&d))
             .expect("every dof belongs to an articulation")
     }
 
-    /// The links from `l` up to its articulation's root that carry a dof, child first.
-    fn chain(&self, l: usize) -> Vec<(usize, usize)> {
+    /// The articulation `(first dof, dofs)` that dof `d` belongs to: its block of the system
+    /// matrix.
+    fn dof_block(&self, d: usize) -> (usize, usize) {
+        let b = self.block(d);
+        (b.dof0, b.dofs)
+    }
+
+    /// The dofs that move link `l`: its joint's, a floating root's six, none for a fixed root.
+    fn link_dofs(&self, l: usize) -> Vec<usize> {
+        let link = &self.scene.links[l];
+        match (link.dof, link.free_root) {
+            (Some(d), _) => vec![d],
+            (None, Some(root)) => (root.dof0..root.dof0 + 6).collect(),
+            (None, None) => vec![],
+        }
+    }
+
+    /// The dofs from link `l` up to its articulation's root, child first (descending).
+    fn chain(&self, l: usize) -> Vec<usize> {
         let mut out = Vec::new();
         let mut at = Some(l);
         while let Some(k) = at {
-            if let Some(d) = self.scene.links[k].dof {
-                out.push((k, d));
-            }
+            out.extend(self.link_dofs(k).into_iter().rev());
             at = self.scene.links[k].parent;
         }
         out
+    }
+
+    /// Dof `d`'s motion subspace at the env origin as WGSL expressions `(angular, linear)`: a
+    /// joint's from `kinematics`; a floating root's a unit translation of its centre of mass
+    /// or a unit rotation about it, along an env axis.
+    fn motion(&self, d: usize) -> (String, String) {
+        let Some(axis) = self.scene.dofs[d].root_axis else {
+            let l = self
+                .scene
+                .links
+                .iter()
+                .position(|link| link.dof == Some(d))
+                .expect("a joint dof has its link");
+            return (format!("sw[{l}]"), format!("su[{l}]"));
+        };
+        let e = v3(Vec3::AXES[axis % 3]);
+        if axis < 3 {
+            ("vec3<f32>(0.0)".into(), e)
+        } else {
+            let (_, root) = self
+                .scene
+                .free_roots()
+                .find(|(_, r)| (r.dof0..r.dof0 + 6).contains(&d))
+                .expect("a root dof has its root");
+            (e.clone(), format!("cross(fcom[{}], {e})", root.index))
+        }
+    }
+
+    /// A floating root's six velocity dofs as the WGSL vectors (centre-of-mass velocity,
+    /// angular velocity).
+    fn root_velocity(root: FreeRoot) -> (String, String) {
+        let r = root.dof0;
+        let v = |k: usize| format!("vec3<f32>(qd[{k}], qd[{}], qd[{}])", k + 1, k + 2);
+        (v(r), v(r + 3))
     }
 }
 
@@ -182,9 +230,10 @@ mod tests {
         assert!(!src.contains("L_PARENT") && src.contains("lpos[7]"));
     }
 
-    /// A floating base is refused, with an error naming the backend that simulates it.
+    /// A floating base compiles to six root dofs ahead of its joints' and a kernel that
+    /// integrates its root; the Ant on the ground plane too.
     #[test]
-    fn floating_bases_are_refused() {
+    fn floating_base_kernels_are_valid_wgsl() {
         let mut art = passive_articulation(orbit_conformance::floating_tree());
         art.fixed_base = false;
         let cfg = SceneCfg {
@@ -193,13 +242,20 @@ mod tests {
             rigid_objects: vec![],
             static_objects: vec![],
         };
-        match CompiledScene::new(&resolve(&cfg)) {
-            Ok(_) => panic!("a floating base compiled"),
-            Err(e) => {
-                let e = e.to_string();
-                assert!(e.contains("floating base") && e.contains("rapier"), "{e}");
-            }
-        }
+        let scene = CompiledScene::new(&resolve(&cfg)).expect("scene compiles");
+        let block = scene.articulations[0];
+        assert_eq!(
+            (block.dofs, block.joint_dofs(), block.joint_dof0()),
+            (8, 2, 6)
+        );
+        let src = validate(&cfg);
+        assert!(src.contains("fcom[0] = fcom[0] + DT * vec3<f32>(qd[0], qd[1], qd[2]);"));
+        validate(&SceneCfg {
+            env_spacing: 3.0,
+            articulations: vec![orbit_conformance::standing_ant(0.6, &[])],
+            rigid_objects: vec![],
+            static_objects: vec![orbit_conformance::ground(1.0)],
+        });
     }
 
     #[test]

@@ -7,8 +7,8 @@ impl Gen<'_> {
     /// `(articulation dofs, links, local link index)` of every link, for buffer addresses.
     fn link_strides(&self) -> Vec<(usize, usize, usize)> {
         let mut out = Vec::new();
-        for &(_, links, _, dofs) in &self.scene.articulations {
-            out.extend((0..links).map(|i| (dofs, links, i)));
+        for b in &self.scene.articulations {
+            out.extend((0..b.links).map(|i| (b.joint_dofs(), b.links, i)));
         }
         out
     }
@@ -17,13 +17,39 @@ impl Gen<'_> {
         let s = self.scene;
         let strides = self.link_strides();
         let (nl, nd) = (s.links.len(), s.dofs.len());
-        let stride = |d: usize| self.dof_block(d).1;
-        let dof_strides: Vec<usize> = (0..nd).map(stride).collect();
+        // The state buffer holds joint dofs only: (dof, its articulation's joint dofs).
+        let joints: Vec<(usize, usize)> = (0..nd)
+            .filter(|&d| s.dofs[d].root_axis.is_none())
+            .map(|d| (d, self.block(d).joint_dofs()))
+            .collect();
 
         self.open("fn load_state()");
-        for (d, st) in dof_strides.iter().enumerate() {
+        for &(d, st) in &joints {
             self.line(format!("q[{d}] = st[dof_addr(0u, {d}u, {st}u)];"));
             self.line(format!("qd[{d}] = st[dof_addr(1u, {d}u, {st}u)];"));
+        }
+        for (l, root) in s.free_roots() {
+            let (_, links, local) = strides[l];
+            let a = |k: u32| format!("link_addr({k}u, {l}u, {links}u, {local}u)");
+            self.line(
+                "// A floating root's state is its link's published pose and origin velocity.",
+            );
+            self.open("");
+            self.line(format!("let rot = normalize(ld4({}));", a(1)));
+            self.line(format!("let w = ld3({});", a(3)));
+            self.line(format!(
+                "let c = qrot(rot, {});",
+                v3(s.links[l].inertial.com)
+            ));
+            self.line(format!("lrot[{l}] = rot;"));
+            self.line(format!("fcom[{}] = ld3({}) + c;", root.index, a(0)));
+            self.line(format!("let v = ld3({}) + cross(w, c);", a(2)));
+            for k in 0..3 {
+                let x = ["x", "y", "z"][k];
+                self.line(format!("qd[{}] = v.{x};", root.dof0 + k));
+                self.line(format!("qd[{}] = w.{x};", root.dof0 + 3 + k));
+            }
+            self.close();
         }
         for b in 0..s.num_bodies() {
             self.line(format!(
@@ -31,8 +57,8 @@ impl Gen<'_> {
             ));
         }
         self.line("// Drive inputs hold for the whole dispatch.");
-        for (d, dof) in s.dofs.iter().enumerate() {
-            let st = dof_strides[d];
+        for &(d, st) in &joints {
+            let dof = &s.dofs[d];
             self.line(format!("in_ef[{d}] = inp[inp_addr(2u, {d}u, {st}u)];"));
             self.line(format!(
                 "in_comp[{d}] = inp[lay[LAY_IN_COMPENSATE] + {d}u] != 0.0;"
@@ -57,7 +83,7 @@ impl Gen<'_> {
         self.close();
 
         self.open("fn load_applied()");
-        for (d, st) in dof_strides.iter().enumerate() {
+        for &(d, st) in &joints {
             self.line(format!("applied[{d}] = st[dof_addr(3u, {d}u, {st}u)];"));
         }
         self.close();
@@ -65,7 +91,7 @@ impl Gen<'_> {
         self.open("fn publish()");
         self.line("kinematics();");
         self.line("rnea_bias();");
-        for (d, st) in dof_strides.iter().enumerate() {
+        for &(d, st) in &joints {
             self.line(format!("st[dof_addr(0u, {d}u, {st}u)] = q[{d}];"));
             self.line(format!("st[dof_addr(1u, {d}u, {st}u)] = qd[{d}];"));
             self.line(format!("st[dof_addr(2u, {d}u, {st}u)] = bias[{d}];"));
