@@ -117,7 +117,7 @@ inventory::submit! {
     AssetCfgDef {
         name: "ant",
         kind: AssetKind::Articulation,
-        description: "MuJoCo's Ant (ant.xml) as Isaac Lab's ANT_CFG: a floating base at 0.5 m, eight effort-driven hinges",
+        description: "The Ant of Isaac Lab's ANT_CFG (isaac_ant.xml): a floating base at 0.5 m, eight effort-driven hinges",
         file: "assets/ant.ron",
         config: include_str!("../assets/ant.ron"),
     }

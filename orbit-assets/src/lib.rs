@@ -12,7 +12,8 @@
 //!   `franka_mount`, `ground_plane`; scenes compose them by name ([`compose_scene`]).
 //! - [`bundled`] / [`bundled_names`]: files compiled into the crate: the Franka Panda with the
 //!   Fancy Gym push rod (`franka_panda_rod.urdf`), the cart-pole (`cartpole.urdf`), MuJoCo's
-//!   Ant (`ant.xml`) and Fancy Gym's box-pushing scene (`scenes/box_pushing.ron`).
+//!   Ant (`ant.xml`, and `isaac_ant.xml` with Isaac Gym's joint settings) and Fancy Gym's
+//!   box-pushing scene (`scenes/box_pushing.ron`).
 //! - [`box_pushing_scene_cfg`]: that scene as an [`orbit_core::scene::SceneCfg`], with
 //!   command-line style overrides.
 //! - [`load_model`] / [`model_loader`]: resolve an [`orbit_core::scene::AssetSource`] against
