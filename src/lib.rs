@@ -15,6 +15,7 @@ pub use orbit_physics_rapier as physics_rapier;
 pub use orbit_physics_wgpu as physics_wgpu;
 pub use orbit_render as render;
 pub use orbit_rl as rl;
+pub use orbit_task_ant as task_ant;
 pub use orbit_task_box_pushing as task_box_pushing;
 pub use orbit_task_box_to_spot as task_box_to_spot;
 pub use orbit_task_cartpole as task_cartpole;
@@ -71,6 +72,7 @@ pub fn link_registrations() {
         std::mem::size_of::<task_box_to_spot::ObjectPointParams>(),
         task_reach::TASK_ID,
         task_cartpole::TASK_ID,
+        task_ant::TASK_ID,
     );
 }
 

@@ -65,6 +65,9 @@ pub trait RewardTerm: Send + Sync {
     /// Computes the term for all envs. The manager may run a step's terms concurrently, so a
     /// term depends only on `env` and itself.
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]);
+    /// Restarts the listed envs' state after their reset events (Isaac Lab's
+    /// `ManagerTermBase.reset`), for a term that keeps state across steps.
+    fn reset(&mut self, _scene: &Scene, _env_ids: &[usize]) {}
 }
 
 /// A termination term: writes one flag per env.

@@ -155,6 +155,9 @@ impl Manager for RewardManager {
         for &e in env_ids {
             self.episode_sums[e * num_terms..(e + 1) * num_terms].fill(0.0);
         }
+        for (_, _, term) in &mut self.terms {
+            term.reset(ctx.scene, env_ids);
+        }
         log
     }
 }

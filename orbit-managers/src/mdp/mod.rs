@@ -6,6 +6,7 @@ mod base_state;
 mod commands;
 mod curriculum;
 mod events;
+mod locomotion;
 mod observations;
 mod rewards;
 mod terminations;
@@ -15,6 +16,7 @@ pub use base_state::*;
 pub use commands::*;
 pub use curriculum::*;
 pub use events::*;
+pub use locomotion::*;
 pub use observations::*;
 
 use glam::{Quat, Vec3};
@@ -110,6 +112,26 @@ impl JointSel {
             .set_bias_compensation(self.articulation, &self.dofs, true)?;
         Ok(())
     }
+}
+
+/// Position limits `(lower, upper)` of the listed dofs (`±inf` for an unlimited joint).
+pub fn joint_limits(
+    model: &orbit_core::scene::ArticulationModel,
+    dofs: &[usize],
+) -> Vec<(f32, f32)> {
+    let dof_links = model.dof_links();
+    dofs.iter()
+        .map(|&j| {
+            match model.links[dof_links[j]]
+                .joint
+                .as_ref()
+                .and_then(|j| j.limits)
+            {
+                Some([lo, hi]) => (lo, hi),
+                None => (f32::NEG_INFINITY, f32::INFINITY),
+            }
+        })
+        .collect()
 }
 
 /// Parameters naming a rigid object.

@@ -57,19 +57,7 @@ impl RewardTerm for JointPosLimits {
 
 inventory::submit! { RewardTermDef { name: "joint_pos_limits", build: |c| {
     let sel = JointSel::resolve(c, &c.params()?)?;
-    let model = &c.scene.desc.articulations[sel.articulation].model;
-    let dof_links = model.dof_links();
-    let limits = sel
-        .dofs
-        .iter()
-        .map(|&j| {
-            let joint = model.links[dof_links[j]].joint.as_ref();
-            match joint.and_then(|j| j.limits) {
-                Some([lo, hi]) => (lo, hi),
-                None => (f32::NEG_INFINITY, f32::INFINITY),
-            }
-        })
-        .collect();
+    let limits = joint_limits(&c.scene.desc.articulations[sel.articulation].model, &sel.dofs);
     Ok(Box::new(JointPosLimits { sel, limits }))
 } } }
 
