@@ -88,7 +88,11 @@ fn pass(
         }
     }
     if !checksum.is_finite() {
-        return Err("the simulation diverged".into());
+        return Err(format!(
+            "the simulation diverged: lower --effort ({}) or --dt ({})",
+            args.effort, args.dt
+        )
+        .into());
     }
     Ok((start.elapsed(), kernel))
 }

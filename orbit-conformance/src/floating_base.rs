@@ -142,8 +142,8 @@ pub fn ant_standing_height(backend: &str) {
 }
 
 /// The floating tree's root state written to one env reads back as written (to 1e-5) with the
-/// joint state kept, the other env is untouched, and a fixed base refuses root writes with an
-/// error naming `fixed_base`.
+/// joint state kept and the root's children on it, the other env is untouched, and a fixed
+/// base refuses root writes with an error naming `fixed_base`.
 pub fn floating_root_writes(backend: &str) {
     let mut art = passive_articulation(floating_tree());
     art.fixed_base = false;
@@ -191,6 +191,20 @@ pub fn floating_root_writes(backend: &str) {
         (view.joint_pos[2] - 0.3).abs() < 1e-6,
         "the joint state is kept"
     );
+    // The root's children follow it: a child's origin is its joint frame on the root.
+    let model = &sim.layout().articulations[0].model;
+    for (i, link) in model.links.iter().enumerate().skip(1) {
+        let (Some(0), Some(joint)) = (link.parent, link.joint.as_ref()) else {
+            continue;
+        };
+        let want = state.pose.transform_point(joint.origin.pos);
+        assert!(
+            close(view.link_pos[root + i], want),
+            "link `{}` at {:?}, not on the written root at {want:?}",
+            link.name,
+            view.link_pos[root + i]
+        );
+    }
     assert!(
         close(view.link_pos[0], Vec3::new(0.0, 0.0, 1.0)),
         "env 0 is untouched"

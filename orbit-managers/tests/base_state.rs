@@ -1,4 +1,4 @@
-//! The base-state terms on a floating base in free fall: MuJoCo's Ant released 1 m above the
+//! The base-state terms on a floating base in free fall: the Ant released 1 m above the
 //! ground, rolled 30° about x, falls for four physics steps of 1/120 s (two env steps) without
 //! touching it. Semi-implicit Euler gives the speed `g h n` exactly and a height between what
 //! explicit and semi-implicit Euler give; in base axes the fall points along

@@ -407,7 +407,9 @@ impl CompiledScene {
         let num_links = links.len();
         if num_links > MAX_LINKS || dofs.len() > MAX_DOFS {
             return Err(unsupported(format!(
-                "{} links and {} dofs per env exceed the kernel's limits of {MAX_LINKS} links and {MAX_DOFS} dofs",
+                "{} links and {} dofs per env (six for each floating base) exceed the kernel's \
+                 limits of {MAX_LINKS} links and {MAX_DOFS} dofs; use `sim.backend: \"rapier\"` \
+                 (or `--backend rapier`)",
                 num_links,
                 dofs.len()
             )));

@@ -46,10 +46,10 @@ impl InverseWeights {
                 if let Some(root) = links[i].free_root {
                     // Translations of the root's centre of mass, rotations about it.
                     let c = poses[i].transform_point(links[i].inertial.com).as_dvec3();
-                    for (k, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
-                        jp[root.dof0 + k] = e;
-                        jp[root.dof0 + 3 + k] = e.cross(point - c);
-                        jr[root.dof0 + 3 + k] = e;
+                    for (axis, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
+                        jp[root.dof0 + axis] = e;
+                        jp[root.dof0 + 3 + axis] = e.cross(point - c);
+                        jr[root.dof0 + 3 + axis] = e;
                     }
                 }
                 if let Some(d) = links[i].dof {

@@ -140,13 +140,18 @@ inventory::submit! { ObservationTermDef { name: "base_heading_proj", build: |c| 
 
 /// `progress_reward`: the speed at which the base approaches the target horizontally,
 /// `(d_{t−1} − d_t) / step_dt` (Isaac Lab's potential `−d / step_dt`, differenced). A reset
-/// restarts the difference from the base's new position.
+/// restarts the difference from the base's new position. Evaluating the term again within a
+/// step (an inspection) gives the same values.
 struct Progress {
     articulation: usize,
     target: Vec3,
     step_dt: f32,
-    /// Horizontal distance to the target after the last step or reset, per env.
-    last: Vec<f32>,
+    /// The env step whose distances `now` holds.
+    step: Option<u64>,
+    /// Per env, the horizontal distance to the target before that step (or after a reset).
+    before: Vec<f32>,
+    /// Per env, the distance measured at that step (or after a reset).
+    now: Vec<f32>,
 }
 
 impl Progress {
@@ -160,17 +165,22 @@ impl Progress {
 
 impl RewardTerm for Progress {
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
+        if self.step != Some(env.common_step_counter) {
+            // A new step: the last step's distances become the ones to difference against.
+            std::mem::swap(&mut self.before, &mut self.now);
+            self.step = Some(env.common_step_counter);
+        }
         let view = env.scene.backend.articulation(self.articulation);
         let (target, dt) = (self.target, self.step_dt);
-        for (e, (o, last)) in out.iter_mut().zip(&mut self.last).enumerate() {
-            let d = heading(&view, e, target).distance;
-            *o = (*last - d) / dt;
-            *last = d;
+        for (e, (o, now)) in out.iter_mut().zip(&mut self.now).enumerate() {
+            *now = heading(&view, e, target).distance;
+            *o = (self.before[e] - *now) / dt;
         }
     }
     fn reset(&mut self, scene: &Scene, env_ids: &[usize]) {
         for (e, d) in self.distances(scene, env_ids.iter().copied()) {
-            self.last[e] = d;
+            self.before[e] = d;
+            self.now[e] = d;
         }
     }
 }
@@ -178,8 +188,9 @@ impl RewardTerm for Progress {
 inventory::submit! { RewardTermDef { name: "progress_reward", build: |c| {
     let p: TargetParams = c.params()?;
     let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
-    let mut term = Progress { articulation, target: p.target_pos, step_dt: c.step_dt, last: vec![] };
-    term.last = term.distances(c.scene, 0..c.scene.num_envs()).into_iter().map(|(_, d)| d).collect();
+    let mut term = Progress { articulation, target: p.target_pos, step_dt: c.step_dt, step: None, before: vec![], now: vec![] };
+    term.now = term.distances(c.scene, 0..c.scene.num_envs()).into_iter().map(|(_, d)| d).collect();
+    term.before = term.now.clone();
     Ok(Box::new(term))
 } } }
 
@@ -193,18 +204,33 @@ pub struct BonusParams {
     /// Target in the env frame (m).
     #[serde(default = "far_ahead")]
     pub target_pos: Vec3,
-    /// Projection above which the bonus is full.
-    pub threshold: f32,
+    /// Projection above which the bonus is full (required).
+    pub threshold: Option<f32>,
 }
 
 impl Default for BonusParams {
-    /// No threshold: the term's builder asks for one.
     fn default() -> Self {
         Self {
             asset: robot(),
             target_pos: far_ahead(),
-            threshold: f32::NAN,
+            threshold: None,
         }
+    }
+}
+
+/// `params.threshold`, required, inside `range` (described by `range_text`).
+fn threshold(
+    ctx: &TermContext<'_>,
+    value: Option<f32>,
+    range: impl Fn(f32) -> bool,
+    range_text: &str,
+) -> Result<f32, EnvError> {
+    match value {
+        None => Err(ctx.error(format!(
+            "params.threshold is required: a value in {range_text}"
+        ))),
+        Some(t) if range(t) => Ok(t),
+        Some(t) => Err(ctx.error(format!("params.threshold must be in {range_text}, got {t}"))),
     }
 }
 
@@ -236,19 +262,14 @@ impl RewardTerm for Bonus {
 
 fn bonus(ctx: &TermContext<'_>, upright: bool) -> Result<Box<dyn RewardTerm>, EnvError> {
     let p: BonusParams = ctx.params()?;
-    if !(p.threshold > 0.0 && p.threshold <= 1.0) {
-        return Err(ctx.error(format!(
-            "params.threshold must be a projection in (0, 1], got {}",
-            p.threshold
-        )));
-    }
+    let threshold = threshold(ctx, p.threshold, |t| t > 0.0 && t <= 1.0, "(0, 1]")?;
     let articulation = ctx
         .scene
         .articulation(&format!("{}.params.asset", ctx.field), &p.asset)?;
     Ok(Box::new(Bonus {
         articulation,
         target: p.target_pos,
-        threshold: p.threshold,
+        threshold,
         upright,
     }))
 }
@@ -256,7 +277,7 @@ fn bonus(ctx: &TermContext<'_>, upright: bool) -> Result<Box<dyn RewardTerm>, En
 inventory::submit! { RewardTermDef { name: "upright_posture_bonus", build: |c| bonus(c, true) } }
 inventory::submit! { RewardTermDef { name: "move_to_target_bonus", build: |c| bonus(c, false) } }
 
-/// Parameters of the gear-weighted joint penalties.
+/// Parameters of `power_consumption`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GearParams {
@@ -267,13 +288,32 @@ pub struct GearParams {
     /// are the gears over the largest.
     #[serde(default)]
     pub gear_ratio: BTreeMap<String, f32>,
-    /// `joint_pos_limits_penalty_ratio`: the normalised position beyond which a joint is
-    /// penalised.
-    #[serde(default)]
-    pub threshold: Option<f32>,
 }
 
 impl Default for GearParams {
+    fn default() -> Self {
+        Self {
+            asset: robot(),
+            gear_ratio: BTreeMap::new(),
+        }
+    }
+}
+
+/// Parameters of `joint_pos_limits_penalty_ratio`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LimitsRatioParams {
+    /// Articulation name.
+    #[serde(default = "robot")]
+    pub asset: String,
+    /// Gear ratio per joint-name regex, as for `power_consumption`.
+    #[serde(default)]
+    pub gear_ratio: BTreeMap<String, f32>,
+    /// The normalised position beyond which a joint is penalised (required).
+    pub threshold: Option<f32>,
+}
+
+impl Default for LimitsRatioParams {
     fn default() -> Self {
         Self {
             asset: robot(),
@@ -287,11 +327,11 @@ impl Default for GearParams {
 fn scaled_gears(
     ctx: &TermContext<'_>,
     articulation: usize,
-    p: &GearParams,
+    gear_ratio: &BTreeMap<String, f32>,
 ) -> Result<Vec<f32>, EnvError> {
     let n = ctx.scene.backend.layout().articulations[articulation].num_dofs();
     let mut gears = vec![1.0f32; n];
-    for (pattern, &gear) in &p.gear_ratio {
+    for (pattern, &gear) in gear_ratio {
         if !(gear.is_finite() && gear > 0.0) {
             return Err(ctx.error(format!(
                 "params.gear_ratio[{pattern:?}] must be positive, got {gear}"
@@ -331,7 +371,7 @@ impl RewardTerm for Power {
 inventory::submit! { RewardTermDef { name: "power_consumption", build: |c| {
     let p: GearParams = c.params()?;
     let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
-    let weights = scaled_gears(c, articulation, &p)?;
+    let weights = scaled_gears(c, articulation, &p.gear_ratio)?;
     if c.action_dim != weights.len() {
         return Err(c.error(format!(
             "pairs action j with joint j, but the actions have {} values and `{}` {} joints",
@@ -371,13 +411,10 @@ impl RewardTerm for LimitsRatio {
 }
 
 inventory::submit! { RewardTermDef { name: "joint_pos_limits_penalty_ratio", build: |c| {
-    let p: GearParams = c.params()?;
-    let threshold = p.threshold.unwrap_or(f32::NAN);
-    if !(0.0..1.0).contains(&threshold) {
-        return Err(c.error(format!("params.threshold must be in [0, 1), got {threshold}")));
-    }
+    let p: LimitsRatioParams = c.params()?;
+    let threshold = threshold(c, p.threshold, |t| (0.0..1.0).contains(&t), "[0, 1)")?;
     let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
-    let weights = scaled_gears(c, articulation, &p)?;
+    let weights = scaled_gears(c, articulation, &p.gear_ratio)?;
     let all: Vec<usize> = (0..weights.len()).collect();
     let limits = finite_limits(c, articulation, &all)?;
     Ok(Box::new(LimitsRatio { articulation, weights, limits, threshold }))

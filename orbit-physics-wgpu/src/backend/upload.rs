@@ -7,7 +7,8 @@ use super::WgpuBackend;
 use crate::layout;
 
 impl WgpuBackend {
-    /// Default joint state, object root states, unit mass scales and the shapes' frictions.
+    /// Default joint state, the default root state of every floating base (its root link's
+    /// rows) and rigid object, unit mass scales and the shapes' frictions.
     pub(super) fn init_state(&mut self, desc: &SceneDesc) {
         let n = self.buffers.num_envs;
         for (a, art) in desc.articulations.iter().enumerate() {

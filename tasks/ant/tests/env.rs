@@ -2,16 +2,16 @@
 //! Isaac Lab's start pose (joint offsets off) with zero torques: it falls freely for 1/60 s
 //! (its feet start 2 cm above the ground), so every quantity has a closed form.
 
-use orbit_managers::make;
+use orbit_managers::{ManagerBasedRlEnv, make};
 use orbit_physics_rapier as _;
 use orbit_task_ant::TASK_ID;
 
 const DT: f32 = 1.0 / 60.0;
 const G: f32 = 9.81;
 
-/// The env after one zero-torque step from the start pose moving at `vx` m/s along x; returns
-/// its observation row and reward.
-fn one_step(vx: f32) -> (Vec<f32>, f32) {
+/// The env after one zero-torque step from the start pose moving at `vx` m/s along x, and the
+/// step's reward.
+fn stepped(vx: f32) -> (ManagerBasedRlEnv, f32) {
     let o = [
         "num_envs=1".to_string(),
         "sim.backend=\"rapier\"".to_string(),
@@ -22,9 +22,29 @@ fn one_step(vx: f32) -> (Vec<f32>, f32) {
     let mut env = make(TASK_ID, &o).unwrap_or_else(|e| panic!("{e}"));
     env.reset().unwrap();
     let reward = env.step(&[0.0; 8]).unwrap().reward[0];
+    (env, reward)
+}
+
+/// [`stepped`]'s observation row and reward.
+fn one_step(vx: f32) -> (Vec<f32>, f32) {
+    let (env, reward) = stepped(vx);
     let (obs, dim) = env.observation("policy").expect("policy observations");
     assert_eq!(dim, 36, "Isaac Lab's 60 values less the 24 foot forces");
     (obs.to_vec(), reward)
+}
+
+/// The progress term after one step at 1 m/s, evaluated twice.
+fn progress_twice() -> (f32, f32) {
+    let (mut env, _) = stepped(1.0);
+    let mut progress = || {
+        let terms = env.evaluate_reward_terms();
+        terms
+            .iter()
+            .find(|(n, _)| n == "progress")
+            .expect("progress term")
+            .1[0]
+    };
+    (progress(), progress())
 }
 
 /// Upright and facing the target: height 0.5 − g t²/2, velocity (vx, 0, −g t) in base axes,
@@ -61,4 +81,13 @@ fn progress_towards_the_target_is_rewarded_at_its_speed() {
         "progress {}",
         moving - still
     );
+}
+
+/// Inspecting the terms after a step reads the step's progress, 1 m/s, and leaves the term's
+/// state alone: a second inspection reads the same.
+#[test]
+fn inspecting_the_progress_term_repeats_its_value() {
+    let (first, second) = progress_twice();
+    assert!((first - 1.0).abs() < 1e-3, "progress {first} m/s");
+    assert_eq!(first, second);
 }
