@@ -47,6 +47,9 @@ struct Args {
     /// Worker threads of a CPU backend (0 = one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Velocity-solver iterations per physics step (0: the backend's default).
+    #[arg(long, default_value_t = 0)]
+    solver_iterations: usize,
     /// Scene config overrides `key.path=value`.
     #[arg(long = "set")]
     overrides: Vec<String>,
@@ -110,17 +113,20 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let sim = SimCfg {
         backend: args.backend.clone(),
         num_threads: args.threads,
+        solver_iterations: args.solver_iterations,
         dt: args.dt,
         ..SimCfg::default()
     };
     let chunks = args.steps.div_ceil(args.substeps);
     let steps = chunks * args.substeps;
     println!(
-        "scene {} | backend {} | dt {} s | {} physics steps per dispatch | {steps} timed steps",
+        "scene {} | backend {} | dt {} s | {} physics steps per dispatch | solver iterations {} (0: the \
+         backend's default) | {steps} timed steps",
         args.scene.display(),
         args.backend,
         args.dt,
-        args.substeps
+        args.substeps,
+        args.solver_iterations
     );
     println!("|  envs | physics steps/s | kernel ms / step | kernel steps/s | memory per env |");
     println!("|------:|----------------:|-----------------:|---------------:|---------------:|");
