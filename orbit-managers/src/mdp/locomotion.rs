@@ -44,39 +44,28 @@ fn wrap(a: f32) -> f32 {
     a.sin().atan2(a.cos())
 }
 
-/// The base's view of a target: what the heading terms read, per env.
-#[derive(Clone, Copy)]
-struct Heading {
-    /// Roll and yaw of the base.
-    roll: f32,
-    yaw: f32,
-    /// z of world up in base axes: the cosine of the base's tilt.
-    up_proj: f32,
-    /// Cosine between the base's x axis and the horizontal direction to the target.
-    heading_proj: f32,
-    /// Yaw of the direction to the target minus the base's yaw, in [−π, π].
-    angle_to_target: f32,
-    /// Horizontal distance to the target.
-    distance: f32,
-}
-
-/// Reads env `e`'s base against `target`.
-fn heading(view: &orbit_core::physics::ArticulationView<'_>, e: usize, target: Vec3) -> Heading {
+/// Env `e`'s base: the root link's position and orientation.
+fn base_pose(view: &orbit_core::physics::ArticulationView<'_>, e: usize) -> (Vec3, Quat) {
     let root = e * view.num_links;
-    let (pos, rot) = (view.link_pos[root], view.link_quat[root]);
-    let (roll, yaw) = roll_yaw(rot);
-    let to_target = (target - pos) * Vec3::new(1.0, 1.0, 0.0);
-    Heading {
-        roll,
-        yaw,
-        up_proj: (rot.inverse() * Vec3::Z).z,
-        heading_proj: (rot * Vec3::X).dot(to_target.normalize_or_zero()),
-        angle_to_target: wrap(to_target.y.atan2(to_target.x) - yaw),
-        distance: to_target.length(),
-    }
+    (view.link_pos[root], view.link_quat[root])
 }
 
-/// Which [`Heading`] quantity an observation term writes.
+/// The horizontal vector from `pos` to `target`; its length is the progress terms' distance.
+fn to_target(pos: Vec3, target: Vec3) -> Vec3 {
+    (target - pos) * Vec3::new(1.0, 1.0, 0.0)
+}
+
+/// z of world up in base axes: the cosine of the base's tilt.
+fn up_proj(rot: Quat) -> f32 {
+    (rot.inverse() * Vec3::Z).z
+}
+
+/// Cosine between the base's x axis and the horizontal direction `to_target`.
+fn heading_proj(rot: Quat, to_target: Vec3) -> f32 {
+    (rot * Vec3::X).dot(to_target.normalize_or_zero())
+}
+
+/// Which quantity of the base's heading an observation term writes.
 #[derive(Clone, Copy)]
 enum HeadingObs {
     /// `[yaw, roll]` (2).
@@ -107,12 +96,18 @@ impl ObservationTerm for HeadingTerm {
         let view = env.scene.backend.articulation(self.articulation);
         let (target, quantity) = (self.target, self.quantity);
         fill_rows(out, self.dim(), |e, row| {
-            let h = heading(&view, e, target);
+            let (pos, rot) = base_pose(&view, e);
             match quantity {
-                HeadingObs::YawRoll => row.copy_from_slice(&[h.yaw, h.roll]),
-                HeadingObs::AngleToTarget => row[0] = h.angle_to_target,
-                HeadingObs::UpProj => row[0] = h.up_proj,
-                HeadingObs::HeadingProj => row[0] = h.heading_proj,
+                HeadingObs::YawRoll => {
+                    let (roll, yaw) = roll_yaw(rot);
+                    row.copy_from_slice(&[yaw, roll]);
+                }
+                HeadingObs::AngleToTarget => {
+                    let d = to_target(pos, target);
+                    row[0] = wrap(d.y.atan2(d.x) - roll_yaw(rot).1);
+                }
+                HeadingObs::UpProj => row[0] = up_proj(rot),
+                HeadingObs::HeadingProj => row[0] = heading_proj(rot, to_target(pos, target)),
             }
         });
     }
@@ -155,11 +150,9 @@ struct Progress {
 }
 
 impl Progress {
-    fn distances(&self, scene: &Scene, env_ids: impl Iterator<Item = usize>) -> Vec<(usize, f32)> {
-        let view = scene.backend.articulation(self.articulation);
-        env_ids
-            .map(|e| (e, heading(&view, e, self.target).distance))
-            .collect()
+    /// Env `e`'s horizontal distance to the target.
+    fn distance(&self, view: &orbit_core::physics::ArticulationView<'_>, e: usize) -> f32 {
+        to_target(base_pose(view, e).0, self.target).length()
     }
 }
 
@@ -171,16 +164,16 @@ impl RewardTerm for Progress {
             self.step = Some(env.common_step_counter);
         }
         let view = env.scene.backend.articulation(self.articulation);
-        let (target, dt) = (self.target, self.step_dt);
-        for (e, (o, now)) in out.iter_mut().zip(&mut self.now).enumerate() {
-            *now = heading(&view, e, target).distance;
-            *o = (self.before[e] - *now) / dt;
+        for (e, o) in out.iter_mut().enumerate() {
+            self.now[e] = self.distance(&view, e);
+            *o = (self.before[e] - self.now[e]) / self.step_dt;
         }
     }
     fn reset(&mut self, scene: &Scene, env_ids: &[usize]) {
-        for (e, d) in self.distances(scene, env_ids.iter().copied()) {
-            self.before[e] = d;
-            self.now[e] = d;
+        let view = scene.backend.articulation(self.articulation);
+        for &e in env_ids {
+            let d = self.distance(&view, e);
+            (self.before[e], self.now[e]) = (d, d);
         }
     }
 }
@@ -188,9 +181,9 @@ impl RewardTerm for Progress {
 inventory::submit! { RewardTermDef { name: "progress_reward", build: |c| {
     let p: TargetParams = c.params()?;
     let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
-    let mut term = Progress { articulation, target: p.target_pos, step_dt: c.step_dt, step: None, before: vec![], now: vec![] };
-    term.now = term.distances(c.scene, 0..c.scene.num_envs()).into_iter().map(|(_, d)| d).collect();
-    term.before = term.now.clone();
+    let n = c.scene.num_envs();
+    let mut term = Progress { articulation, target: p.target_pos, step_dt: c.step_dt, step: None, before: vec![0.0; n], now: vec![0.0; n] };
+    term.reset(c.scene, &(0..n).collect::<Vec<_>>());
     Ok(Box::new(term))
 } } }
 
@@ -249,12 +242,12 @@ impl RewardTerm for Bonus {
         let view = env.scene.backend.articulation(self.articulation);
         let (target, th, upright) = (self.target, self.threshold, self.upright);
         fill_rows(out, 1, |e, o| {
-            let h = heading(&view, e, target);
-            o[0] = match (upright, h.up_proj > th, h.heading_proj > th) {
-                (true, true, _) => 1.0,
-                (true, false, _) => 0.0,
-                (false, _, true) => 1.0,
-                (false, _, false) => h.heading_proj / th,
+            let (pos, rot) = base_pose(&view, e);
+            o[0] = if upright {
+                if up_proj(rot) > th { 1.0 } else { 0.0 }
+            } else {
+                let h = heading_proj(rot, to_target(pos, target));
+                if h > th { 1.0 } else { h / th }
             };
         });
     }
@@ -384,7 +377,8 @@ inventory::submit! { RewardTermDef { name: "power_consumption", build: |c| {
 /// `joint_pos_limits_penalty_ratio`: `Σ_j w_j (|u_j| − t) / (1 − t)` over the joints whose
 /// normalised position `u_j` (−1 at the lower limit, 1 at the upper) exceeds `t` in size.
 struct LimitsRatio {
-    articulation: usize,
+    /// Every joint of the articulation.
+    sel: JointSel,
     weights: Vec<f32>,
     limits: Vec<(f32, f32)>,
     threshold: f32,
@@ -392,20 +386,19 @@ struct LimitsRatio {
 
 impl RewardTerm for LimitsRatio {
     fn compute(&mut self, env: &EnvView<'_>, out: &mut [f32]) {
-        let q = env.scene.backend.articulation(self.articulation).joint_pos;
-        let (n, t) = (self.weights.len(), self.threshold);
-        let (w, limits) = (&self.weights, &self.limits);
-        fill_rows(out, 1, |e, o| {
-            o[0] = (0..n)
-                .map(|j| {
-                    let u = normalized(q[e * n + j], limits[j]).abs();
-                    if u > t {
-                        w[j] * (u - t) / (1.0 - t)
-                    } else {
-                        0.0
-                    }
-                })
-                .sum();
+        let q = env
+            .scene
+            .backend
+            .articulation(self.sel.articulation)
+            .joint_pos;
+        let (t, w, limits) = (self.threshold, &self.weights, &self.limits);
+        self.sel.sum_per_env(q, out, |j, q| {
+            let u = normalized(q, limits[j]).abs();
+            if u > t {
+                w[j] * (u - t) / (1.0 - t)
+            } else {
+                0.0
+            }
         });
     }
 }
@@ -415,9 +408,10 @@ inventory::submit! { RewardTermDef { name: "joint_pos_limits_penalty_ratio", bui
     let threshold = threshold(c, p.threshold, |t| (0.0..1.0).contains(&t), "[0, 1)")?;
     let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
     let weights = scaled_gears(c, articulation, &p.gear_ratio)?;
-    let all: Vec<usize> = (0..weights.len()).collect();
-    let limits = finite_limits(c, articulation, &all)?;
-    Ok(Box::new(LimitsRatio { articulation, weights, limits, threshold }))
+    let n = weights.len();
+    let sel = JointSel { articulation, dofs: (0..n).collect(), num_dofs: n };
+    let limits = finite_limits(c, sel.articulation, &sel.dofs)?;
+    Ok(Box::new(LimitsRatio { sel, weights, limits, threshold }))
 } } }
 
 /// `q` normalised by its limits: −1 at the lower, 1 at the upper (Isaac Lab's
