@@ -50,7 +50,10 @@ impl<'a> Importer<'a> {
                         half_length,
                     }
                 };
-                let pose = Pose::new((from + to) / 2.0, Quat::from_rotation_arc(Vec3::Z, axis));
+                // Either end may come first: the shapes are symmetric. The shorter turn keeps an
+                // axis near −z (a leg) from losing half its digits in an almost half turn.
+                let turn = Quat::from_rotation_arc_colinear(Vec3::Z, axis);
+                let pose = Pose::new((from + to) / 2.0, turn);
                 (geometry, pose)
             }
             (_, Some(_)) => {

@@ -494,6 +494,16 @@ impl<'a> Importer<'a> {
                 v => Ok(v.unwrap_or(0.0) as f32),
             }
         };
+        if let Some(k) = a.number("stiffness")?.filter(|&k| k != 0.0) {
+            return Err(a.error(
+                Some("stiffness"),
+                format!(
+                    "joint springs ({k}) are not imported; give the stiffness to an actuator \
+                     group of the asset config (`actuators: {{..: (stiffness: ..)}}`, a drive \
+                     towards 0, as Isaac Lab's implicit actuators do) and remove it here"
+                ),
+            ));
+        }
         let joint = Joint {
             name: name.clone(),
             kind: joint_kind,
