@@ -88,6 +88,26 @@ fn a_massless_root_cannot_float() {
 }
 
 #[test]
+fn a_joint_must_move_mass_or_armature() {
+    let mut model = two_links(2.0);
+    model.links[1].inertial = Inertial::ZERO;
+    let e = resolve(model.clone(), |_| {}).unwrap_err().to_string();
+    assert!(e.contains("`hinge`") && e.contains("moves no mass"), "{e}");
+    // A massless link carrying a massive one (an MJCF body's first joint) is fine.
+    let mut chain = model.clone();
+    let mut tip = chain.links[1].clone();
+    tip.name = "tip".into();
+    tip.parent = Some(1);
+    tip.inertial = two_links(1.0).links[1].inertial;
+    tip.joint = Some(Joint::revolute("tip_hinge", Pose::IDENTITY, Vec3::X, None));
+    chain.links.push(tip);
+    assert!(resolve(chain, |_| {}).is_ok());
+    // So is a massless link on a joint with armature.
+    model.links[1].joint.as_mut().unwrap().armature = 0.01;
+    assert!(resolve(model, |_| {}).is_ok());
+}
+
+#[test]
 fn a_fixed_base_cannot_move() {
     let e = resolve(two_links(2.0), |a| {
         a.fixed_base = true;

@@ -9,7 +9,7 @@ use orbit_core::scene::{ArticulationDesc, Geometry, Inertial, JointKind, RigidBo
 use rapier3d::prelude::*;
 
 use crate::env_world::{ArticulationRow, EnvArticulation, MAX_DOFS};
-use crate::hooks::encode_material;
+use crate::hooks::{SelfCollisionKey, encode_material};
 
 pub(crate) fn to_rapier_pose(p: &OrbitPose) -> Pose {
     Pose::from_parts(p.pos, p.rot)
@@ -123,9 +123,11 @@ fn rapier_joint(
     builder.build()
 }
 
+/// Builds articulation `index` of an env.
 pub(crate) fn build_articulation(
     world: &mut PhysicsWorld,
     desc: &ArticulationDesc,
+    index: usize,
 ) -> Result<EnvArticulation, PhysicsError> {
     let model = &desc.model;
     let mut kin = ArticulationKinematics::new(model);
@@ -154,15 +156,6 @@ pub(crate) fn build_articulation(
                 s.pose = to_root_body.mul_pose(&s.pose);
             }
             pose = pose.mul_pose(&OrbitPose::from_pos(root_com));
-        }
-        if i > 0 && link.inertial.mass <= 0.0 {
-            return Err(PhysicsError::Unsupported {
-                backend: "rapier".into(),
-                reason: format!(
-                    "link `{}` of `{}` is movable but has no mass",
-                    link.name, desc.name
-                ),
-            });
         }
         links.push(add_body(world, &body, &pose, i > 0 || !desc.fixed_base));
     }
@@ -235,6 +228,22 @@ pub(crate) fn build_articulation(
         .get_multibody_mut(multibody)
         .expect("multibody exists");
     mb.set_self_contacts_enabled(desc.self_collisions);
+    if desc.self_collisions {
+        // Links and their collision parents must not touch (the filter hook drops them).
+        for (l, &body) in links.iter().enumerate() {
+            let key = SelfCollisionKey {
+                articulation: index as u32,
+                link: l as u32,
+                parent: model.collision_parent(l).map(|p| p as u32),
+            };
+            for &c in world.bodies[body].colliders() {
+                let collider = &mut world.colliders[c];
+                collider.user_data = key.encode(collider.user_data);
+                collider
+                    .set_active_hooks(collider.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
+            }
+        }
+    }
     // Rapier gives new angular dofs a default damping of 0.1; use the model's values instead.
     mb.damping_mut().fill(0.0);
     for (d, &l) in dof_link.iter().enumerate() {

@@ -13,7 +13,7 @@ use rapier3d::prelude::*;
 
 use crate::DEFAULT_SOLVER_ITERATIONS;
 use crate::build::{add_body, build_articulation, mass_props, to_rapier_pose};
-use crate::hooks::FrictionPriority;
+use crate::hooks::ContactHooks;
 
 /// Most degrees of freedom of one articulation (size of the stack buffer used for state writes).
 pub(crate) const MAX_DOFS: usize = 64;
@@ -101,7 +101,8 @@ impl EnvWorld {
         let arts = scene
             .articulations
             .iter()
-            .map(|a| build_articulation(&mut world, a))
+            .enumerate()
+            .map(|(i, a)| build_articulation(&mut world, a, i))
             .collect::<Result<Vec<_>, _>>()?;
         let mut env = Self {
             world,
@@ -322,7 +323,7 @@ impl EnvWorld {
 
     /// Advances the world one step (after [`apply_inputs`](Self::apply_inputs)).
     pub fn step_world(&mut self, drives: &[&[JointDrive]]) {
-        self.world.step_with_events(&FrictionPriority, &());
+        self.world.step_with_events(&ContactHooks, &());
         for (a, drive) in drives.iter().enumerate() {
             self.clamp_velocities(a, drive);
         }

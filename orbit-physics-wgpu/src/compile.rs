@@ -13,7 +13,7 @@ use crate::BACKEND_NAME;
 /// Largest number of degrees of freedom (all articulations of an env together, six for each
 /// floating base): the kernel keeps the dense `n × n` system matrix in registers and local
 /// memory.
-pub const MAX_DOFS: usize = 16;
+pub const MAX_DOFS: usize = 32;
 /// Largest number of links (all articulations of an env together).
 pub const MAX_LINKS: usize = 32;
 /// Largest number of free rigid objects (a constraint row packs its objects in 8 bits each).
@@ -456,9 +456,11 @@ impl CompiledScene {
                 if let (Some(ai), Some(aj)) = (shape_art[i], shape_art[j])
                     && ai == aj
                 {
+                    let link0 = articulations[ai].link0;
                     let (li, lj) = (si.body.expect("link"), sj.body.expect("link"));
-                    let adjacent = links[li].parent == Some(lj) || links[lj].parent == Some(li);
-                    if !scene.articulations[ai].self_collisions || adjacent {
+                    let art = &scene.articulations[ai];
+                    if !art.self_collisions || art.model.collision_adjacent(li - link0, lj - link0)
+                    {
                         continue;
                     }
                 }

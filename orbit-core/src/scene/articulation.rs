@@ -100,6 +100,28 @@ pub(super) fn resolve_articulation(
             ),
         });
     }
+    // A joint moving nothing with mass (nor armature) would have no inertia to resist it.
+    let mut subtree_mass: Vec<f32> = model.links.iter().map(|l| l.inertial.mass).collect();
+    for (i, link) in model.links.iter().enumerate().rev() {
+        if let Some(p) = link.parent {
+            subtree_mass[p] += subtree_mass[i];
+        }
+    }
+    for (i, link) in model.links.iter().enumerate().skip(1) {
+        if let Some(j) = &link.joint
+            && subtree_mass[i] <= 0.0
+            && j.armature <= 0.0
+        {
+            return Err(SceneError::Invalid {
+                field: format!("{field}.spawn"),
+                message: format!(
+                    "joint `{}` of `{}` moves no mass: give link `{}` or a link below it a \
+                     mass, or the joint an armature",
+                    j.name, cfg.name, link.name
+                ),
+            });
+        }
+    }
     let joints = model.joint_names();
     let n = joints.len();
     let entity = cfg.name.as_str();

@@ -500,6 +500,29 @@ impl ArticulationModel {
             .collect()
     }
 
+    /// The link whose contacts with `link` self-collision filtering drops (Isaac Lab's rule:
+    /// a link does not collide with its parent): the parent, or, past parents that carry
+    /// neither shapes nor mass, the first ancestor that does. Such links only compose the
+    /// joints of one body (an MJCF body with several joints), so the body below them is
+    /// attached to the body above.
+    pub fn collision_parent(&self, link: usize) -> Option<usize> {
+        let mut parent = self.links[link].parent?;
+        while let Some(up) = self.links[parent].parent {
+            let l = &self.links[parent];
+            if !l.shapes.is_empty() || l.inertial.mass > 0.0 {
+                break;
+            }
+            parent = up;
+        }
+        Some(parent)
+    }
+
+    /// Whether self-collision filtering drops contacts between links `a` and `b` (see
+    /// [`ArticulationModel::collision_parent`]).
+    pub fn collision_adjacent(&self, a: usize, b: usize) -> bool {
+        self.collision_parent(a) == Some(b) || self.collision_parent(b) == Some(a)
+    }
+
     /// Index of the link with the given name.
     pub fn link_index(&self, name: &str) -> Option<usize> {
         self.links.iter().position(|l| l.name == name)
