@@ -125,6 +125,16 @@ inventory::submit! {
 
 inventory::submit! {
     AssetCfgDef {
+        name: "humanoid",
+        kind: AssetKind::Articulation,
+        description: "The Humanoid of Isaac Lab's HUMANOID_CFG (isaac_humanoid.xml): a floating torso at 1.34 m, 21 effort-driven hinges held by springs towards 0",
+        file: "assets/humanoid.ron",
+        config: include_str!("../assets/humanoid.ron"),
+    }
+}
+
+inventory::submit! {
+    AssetCfgDef {
         name: "ground_plane",
         kind: AssetKind::StaticObject,
         description: "an infinite ground plane at z = 0 with friction 1",

@@ -8,11 +8,12 @@
 //!   classic locomotion models use (hinge, slide and free joints, primitive geoms, default
 //!   classes, motors), into an articulation with a fixed or floating base.
 //! - [`asset_cfg`] / [`AssetCfgDef`]: asset configs registered by name (Isaac Lab's
-//!   `FRANKA_PANDA_CFG`): `franka_panda_rod`, `cartpole`, `ant`, `push_box`, `lab_table`,
+//!   `FRANKA_PANDA_CFG`): `franka_panda_rod`, `cartpole`, `ant`, `humanoid`, `push_box`, `lab_table`,
 //!   `franka_mount`, `ground_plane`; scenes compose them by name ([`compose_scene`]).
 //! - [`bundled`] / [`bundled_names`]: files compiled into the crate: the Franka Panda with the
 //!   Fancy Gym push rod (`franka_panda_rod.urdf`), the cart-pole (`cartpole.urdf`), MuJoCo's
-//!   Ant (`ant.xml`, and `isaac_ant.xml` with Isaac Gym's joint settings) and Fancy Gym's
+//!   Ant (`ant.xml`, and `isaac_ant.xml` with Isaac Gym's joint settings), Isaac Gym's
+//!   Humanoid (`isaac_humanoid.xml`) and Fancy Gym's
 //!   box-pushing scene (`scenes/box_pushing.ron`).
 //! - [`box_pushing_scene_cfg`]: that scene as an [`orbit_core::scene::SceneCfg`], with
 //!   command-line style overrides.

@@ -324,6 +324,7 @@ fn bundled_scene_is_composed_of_the_asset_configs() {
             "franka_mount",
             "franka_panda_rod",
             "ground_plane",
+            "humanoid",
             "lab_table",
             "push_box"
         ]

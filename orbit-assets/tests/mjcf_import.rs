@@ -1,4 +1,4 @@
-//! MJCF import against MuJoCo: the shipped Ant model's and a several-joint body's masses,
+//! MJCF import against MuJoCo: the shipped Ant's and Humanoid's and a several-joint body's masses,
 //! inertias and forward kinematics agree with MuJoCo's compiled models
 //! (`tests/data/*_mujoco_reference.json`, written by `tools/mjcf_reference.py`), and malformed
 //! documents are errors naming element, attribute and line.
@@ -121,6 +121,25 @@ fn ant_matches_mujoco() {
     check_against_mujoco(&model, &reference);
 }
 
+/// Isaac Gym's Humanoid agrees with MuJoCo: its 16 bodies' masses and inertias from capsules
+/// and spheres at density 1000, poses with the free joint moved and turned and every hinge in
+/// its range (bodies with two or three joints composed in file order); 21 joints in MuJoCo's
+/// order.
+#[test]
+fn humanoid_matches_mujoco() {
+    let model = model_from_mjcf_file(&data("assets/isaac_humanoid.xml")).unwrap();
+    assert!(model.floating_base);
+    let names = model.articulation.joint_names();
+    assert_eq!(names.len(), 21);
+    assert_eq!(
+        &names[..4],
+        ["abdomen_z", "abdomen_y", "abdomen_x", "right_hip_x"]
+    );
+    let reference = reference("tests/data/isaac_humanoid_mujoco_reference.json");
+    assert_eq!(reference["bodies"].as_object().unwrap().len(), 16);
+    check_against_mujoco(&model, &reference);
+}
+
 /// A body moved by three joints (two hinges at different points, then a slide) and a child
 /// on an offset hinge agree with MuJoCo, which composes a body's joints in file order.
 #[test]
@@ -213,6 +232,10 @@ fn malformed_documents_name_line_element_and_attribute() {
         (
             body("<geom type=\"sphere\" size=\"-0.1\"/>"),
             "test.xml:7: <geom> attribute `size`: -0.1 must be positive",
+        ),
+        (
+            body("<joint stiffness=\"20\"/><geom size=\"0.1\"/>"),
+            "test.xml:7: <joint> attribute `stiffness`: joint springs (20) are not imported",
         ),
         (
             body("<joint range=\"30 10\"/><geom size=\"0.1\"/>"),
