@@ -137,13 +137,17 @@ impl RowGather {
                 entries: &entries,
             })
         };
-        let pipeline = gpu.pipeline(&gather_source());
+        let pipeline = gpu
+            .pipeline(&gather_source())
+            .expect("the fixed gather kernel builds");
         let bind_group = bind(
             "orbit gather",
             &pipeline,
             [state, &ids, &cols_buf, &out, &params],
         );
-        let write_pipeline = gpu.pipeline(&write_source());
+        let write_pipeline = gpu
+            .pipeline(&write_source())
+            .expect("the fixed write kernel builds");
         let write_bind_group = bind(
             "orbit write",
             &write_pipeline,

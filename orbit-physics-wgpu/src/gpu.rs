@@ -29,12 +29,19 @@ pub struct Gpu {
 }
 
 impl Gpu {
-    /// The compute pipeline of a WGSL source with entry point `main`, compiled once.
-    pub fn pipeline(&self, source: &str) -> wgpu::ComputePipeline {
+    /// The compute pipeline of a WGSL source with entry point `main`, compiled once; an error
+    /// says what the driver reported (a kernel it cannot compile, memory it cannot give).
+    pub fn pipeline(&self, source: &str) -> Result<wgpu::ComputePipeline, String> {
         let mut cache = self.pipelines.lock().expect("pipeline cache lock");
         if let Some(p) = cache.get(source) {
-            return p.clone();
+            return Ok(p.clone());
         }
+        let scopes = [
+            wgpu::ErrorFilter::Validation,
+            wgpu::ErrorFilter::OutOfMemory,
+            wgpu::ErrorFilter::Internal,
+        ]
+        .map(|filter| self.device.push_error_scope(filter));
         let module = self
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -51,8 +58,14 @@ impl Gpu {
                 compilation_options: Default::default(),
                 cache: None,
             });
+        // Scopes pop innermost first.
+        for scope in scopes.into_iter().rev() {
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                return Err(format!("the GPU driver could not build the kernel: {e}"));
+            }
+        }
         cache.insert(source.to_string(), pipeline.clone());
-        pipeline
+        Ok(pipeline)
     }
 }
 
@@ -174,6 +187,12 @@ async fn open(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<Gpu, S
         .await
         .map_err(|e| format!("the Vulkan adapter `{}` refused a device: {e}", info.name))?;
     tracing::info!(adapter = %info.name, driver = %info.driver, "wgpu physics device");
+    // A lost device turns every later call into an error about invalid objects: say why first.
+    device.set_device_lost_callback(|reason, message| {
+        if reason != wgpu::DeviceLostReason::Destroyed {
+            eprintln!("the GPU device was lost ({reason:?}): {message}");
+        }
+    });
     Ok(Gpu {
         instance,
         adapter,

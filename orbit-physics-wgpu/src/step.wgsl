@@ -60,8 +60,8 @@ var<private> im: array<f32, NL1>;
 var<private> ih: array<vec3<f32>, NL1>;
 var<private> ij: array<mat3x3<f32>, NL1>;
 var<private> bias: array<f32, ND1>;
-// A = M + h(D + d) + h²K, overwritten by its Cholesky factor (lower triangle), and the
-// factor's inverse diagonal.
+// A = M + h(D + d) + h²K, overwritten by its factors (lower triangle), and, for the dense
+// Cholesky factor, its inverse diagonal.
 var<private> amat: array<f32, NDD>;
 var<private> linv: array<f32, ND1>;
 var<private> applied: array<f32, ND1>;

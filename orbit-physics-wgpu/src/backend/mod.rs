@@ -122,7 +122,7 @@ impl WgpuBackend {
             )));
         }
         let source = codegen::kernel_source(&scene, sim, WORKGROUP);
-        let pipeline = gpu.pipeline(&source);
+        let pipeline = gpu.pipeline(&source).map_err(err)?;
         let device = &gpu.device;
         let storage = |label: &str, floats: usize| {
             device.create_buffer(&wgpu::BufferDescriptor {

@@ -8,6 +8,10 @@ use orbit_core::scene::JointKind;
 use super::{Gen, f, m3, q4, v3};
 use crate::compile::FreeRoot;
 
+/// Up to this many dofs the system matrix is factorised by unrolled straight-line code (the
+/// fastest kernel); beyond, by loops over the tree of dofs.
+const UNROLLED_DOFS: usize = 16;
+
 impl Gen<'_> {
     /// Forward kinematics, joint motion subspaces, link velocities and spatial inertias.
     pub(super) fn kinematics(&mut self) {
@@ -248,9 +252,13 @@ impl Gen<'_> {
         self.line("");
     }
 
-    /// In-place Cholesky factorisation A = L Lᵀ (each articulation's dense block) and the
-    /// solve A x = b with it.
+    /// In-place factorisation of the system matrix and the solve A x = b with it: for up to
+    /// [`UNROLLED_DOFS`] dofs, a Cholesky factorisation A = L Lᵀ of each articulation's dense
+    /// block as straight-line code; beyond, loops over the dofs' tree (A = Lᵀ D L).
     pub(super) fn cholesky(&mut self) {
+        if self.nd() > UNROLLED_DOFS {
+            return self.tree_factorisation();
+        }
         let nd = self.nd();
         let at = |i: usize, j: usize| format!("amat[{}]", i * nd + j);
         self.line("// In-place Cholesky factorisation A = L Lᵀ of each articulation's block (lower triangle of amat).");
@@ -291,6 +299,75 @@ impl Gen<'_> {
             }
             self.line(format!("(*b)[{i}] = ({t}) * linv[{i}];"));
         }
+        self.close();
+        self.line("");
+    }
+
+    /// Each dof's parent in its articulation's tree of dofs (`-1` for the first): the next dof
+    /// towards the root; a floating root's six dofs form a chain.
+    fn dof_parents(&self) -> Vec<i32> {
+        let mut parents = vec![-1; self.nd()];
+        for l in 0..self.scene.links.len() {
+            let chain = self.chain(l);
+            for d in self.link_dofs(l) {
+                let at = chain
+                    .iter()
+                    .position(|&c| c == d)
+                    .expect("a link's dof is on its chain");
+                parents[d] = chain.get(at + 1).map_or(-1, |&p| p as i32);
+            }
+        }
+        parents
+    }
+
+    /// Featherstone's factorisation A = Lᵀ D L of a tree's system matrix, whose entries join
+    /// only a dof and its ancestors: it fills nothing in, and loops keep the kernel small for
+    /// many dofs (an unrolled dense Cholesky grows as n³ and the shader compilers slow down
+    /// with it).
+    fn tree_factorisation(&mut self) {
+        let parents: Vec<String> = self.dof_parents().iter().map(|p| p.to_string()).collect();
+        self.line("// Each dof's parent in its articulation's tree of dofs (-1: none).");
+        self.line(format!(
+            "var<private> dof_parent: array<i32, ND1> = array<i32, ND1>({});",
+            parents.join(", ")
+        ));
+        self.line("");
+        self.line("// In-place factorisation A = Lᵀ D L along the tree of dofs (D on the diagonal, L below it).");
+        self.open("fn cholesky()");
+        self.open("for (var k = i32(ND) - 1; k >= 0; k = k - 1)");
+        self.line("let kk = k * i32(ND) + k;");
+        self.line("amat[kk] = max(amat[kk], 1e-12);");
+        self.line("var i = dof_parent[k];");
+        self.open("while (i >= 0)");
+        self.line("let a = amat[k * i32(ND) + i] / amat[kk];");
+        self.line("var j = i;");
+        self.open("while (j >= 0)");
+        self.line("amat[i * i32(ND) + j] -= a * amat[k * i32(ND) + j];");
+        self.line("j = dof_parent[j];");
+        self.close();
+        self.line("amat[k * i32(ND) + i] = a;");
+        self.line("i = dof_parent[i];");
+        self.close();
+        self.close();
+        self.close();
+        self.line("");
+        self.line("// Solves A x = b in place: Lᵀ z = b, then D y = z, then L x = y.");
+        self.open("fn chol_solve(b: ptr<function, array<f32, ND1>>)");
+        self.open("for (var i = i32(ND) - 1; i >= 0; i = i - 1)");
+        self.line("var j = dof_parent[i];");
+        self.open("while (j >= 0)");
+        self.line("(*b)[j] -= amat[i * i32(ND) + j] * (*b)[i];");
+        self.line("j = dof_parent[j];");
+        self.close();
+        self.close();
+        self.open("for (var i = 0; i < i32(ND); i = i + 1)");
+        self.line("(*b)[i] = (*b)[i] / amat[i * i32(ND) + i];");
+        self.line("var j = dof_parent[i];");
+        self.open("while (j >= 0)");
+        self.line("(*b)[i] -= amat[i * i32(ND) + j] * (*b)[j];");
+        self.line("j = dof_parent[j];");
+        self.close();
+        self.close();
         self.close();
         self.line("");
     }

@@ -5,6 +5,12 @@ use std::fmt::Write as _;
 
 use super::{Gen, f};
 
+/// Up to this many dofs each joint-limit row is built where its joint is tested; beyond, the
+/// tests list the rows and one loop builds them. Building a row inlines a solve with the
+/// system matrix, so rows built in place grow the kernel as n², and shader compilers slow down
+/// faster than that (docs/physics.md).
+const UNROLLED_LIMIT_DOFS: usize = 8;
+
 impl Gen<'_> {
     /// The narrow phase's view of the bodies: their poses copied into arrays that the
     /// data-driven pair loop of `step.wgsl` indexes at run time, so that the articulation's
@@ -95,10 +101,30 @@ impl Gen<'_> {
         self.line("");
     }
 
-    /// Joint-limit rows for joints that could reach a limit within this substep.
+    /// Joint-limit rows for joints that could reach a limit within this substep: each row built
+    /// where its test is for up to [`UNROLLED_LIMIT_DOFS`] dofs, in one loop beyond.
     pub(super) fn limit_rows(&mut self) {
+        if self.nd() > UNROLLED_LIMIT_DOFS {
+            return self.limit_rows_loop();
+        }
         self.line("// A limit row when the joint could reach its limit within this substep.");
         self.open("fn limit_rows()");
+        self.limit_tests(Some("var jt: array<f32, ND1>;"), |g, d, lower| {
+            let (side, gap, slot) = if lower {
+                ("1.0", "lo", 2 * d)
+            } else {
+                ("-1.0", "hi", 2 * d + 1)
+            };
+            g.line(format!("jt[{d}] = {side};"));
+            g.line(format!("limit_row(jt, LIMIT_SLOT + {slot}u, {gap});"));
+        });
+        self.close();
+        self.line("");
+    }
+
+    /// Per limited dof, in a block of its own: `reach`, then `prelude`, then the gaps `lo` and
+    /// `hi` to its limits, and `row(d, lower)` where the lower or the upper limit is in reach.
+    fn limit_tests(&mut self, prelude: Option<&str>, row: impl Fn(&mut Self, usize, bool)) {
         for (d, dof) in self.scene.dofs.iter().enumerate() {
             let (lower, upper) = (dof.lower.is_finite(), dof.upper.is_finite());
             if !lower && !upper {
@@ -106,7 +132,9 @@ impl Gen<'_> {
             }
             self.open("");
             self.line(format!("let reach = abs(qd[{d}]) * DT + MARGIN;"));
-            self.line("var jt: array<f32, ND1>;");
+            if let Some(line) = prelude {
+                self.line(line);
+            }
             if lower {
                 self.line(format!("let lo = q[{d}] - {};", f(dof.lower)));
             }
@@ -115,8 +143,7 @@ impl Gen<'_> {
             }
             if lower {
                 self.open("if lo < reach");
-                self.line(format!("jt[{d}] = 1.0;"));
-                self.line(format!("limit_row(jt, LIMIT_SLOT + {}u, lo);", 2 * d));
+                row(self, d, true);
             }
             if upper {
                 if lower {
@@ -124,12 +151,40 @@ impl Gen<'_> {
                 } else {
                     self.open("if hi < reach");
                 }
-                self.line(format!("jt[{d}] = -1.0;"));
-                self.line(format!("limit_row(jt, LIMIT_SLOT + {}u, hi);", 2 * d + 1));
+                row(self, d, false);
             }
             self.close();
             self.close();
         }
+    }
+
+    /// [`Gen::limit_rows`] in two passes: unrolled tests of the limits (the joint state keeps
+    /// constant indices, so it stays in registers) that list the rows, then one loop that
+    /// builds them.
+    fn limit_rows_loop(&mut self) {
+        self.line(
+            "// Limit rows due this substep: dof, direction and gap, listed before they are built.",
+        );
+        self.line("var<private> due_dof: array<u32, ND1>;");
+        self.line("var<private> due_side: array<f32, ND1>;");
+        self.line("var<private> due_gap: array<f32, ND1>;");
+        self.line("// A limit row when a joint could reach its limit within this substep.");
+        self.open("fn limit_rows()");
+        self.line("var due = 0u;");
+        self.limit_tests(None, |g, d, lower| {
+            let (side, gap) = if lower { ("1.0", "lo") } else { ("-1.0", "hi") };
+            g.line(format!("due_dof[due] = {d}u;"));
+            g.line(format!("due_side[due] = {side};"));
+            g.line(format!("due_gap[due] = {gap};"));
+            g.line("due += 1u;");
+        });
+        self.open("for (var k = 0u; k < due; k++)");
+        self.line("var jt: array<f32, ND1>;");
+        self.line("let d = due_dof[k];");
+        self.line("jt[d] = due_side[k];");
+        self.line("let slot = 2u * d + select(1u, 0u, due_side[k] > 0.0);");
+        self.line("limit_row(jt, LIMIT_SLOT + slot, due_gap[k]);");
+        self.close();
         self.close();
         self.line("");
     }

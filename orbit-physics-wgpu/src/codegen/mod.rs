@@ -258,6 +258,18 @@ mod tests {
         });
     }
 
+    /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.
+    #[test]
+    fn humanoid_kernel_is_valid_wgsl() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../orbit-assets/assets/scenes/humanoid.ron");
+        let scene = orbit_assets::load_scene(&file, &[]).expect("the humanoid scene resolves");
+        let compiled = CompiledScene::new(&scene).expect("scene compiles");
+        assert_eq!(compiled.articulations[0].dofs, 27);
+        let src = kernel_source(&compiled, &SimCfg::default(), 64);
+        naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+    }
+
     #[test]
     fn kernels_of_small_scenes_are_valid_wgsl() {
         let init = RootStateCfg {
