@@ -8,14 +8,14 @@
 //! fn free_fall() { orbit_conformance::free_fall("rapier"); }
 //! ```
 
-mod ant_rollout;
 mod facts;
 mod floating_base;
 mod franka;
+mod mujoco_rollout;
 mod scenes;
 
-pub use ant_rollout::*;
 pub use facts::*;
 pub use floating_base::*;
 pub use franka::*;
+pub use mujoco_rollout::*;
 pub use scenes::*;

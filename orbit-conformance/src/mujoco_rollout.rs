@@ -1,10 +1,13 @@
-//! Agreement with a MuJoCo rollout of the Ant under open-loop joint torques
-//! (`data/mujoco_ant_rollout.json`, written by `tools/mujoco_ant_rollout.py`): a floating base
-//! in free fall, then landing.
+//! Agreement with MuJoCo rollouts of the Ant and the Humanoid under open-loop joint torques
+//! (`data/mujoco_{ant,humanoid}_rollout.json`, written by `tools/mujoco_rollout.py`): a
+//! floating base in free fall, then landing.
+
+use std::path::Path;
 
 use glam::{Quat, Vec3};
+use orbit_core::math::Pose;
 use orbit_core::physics::PhysicsBackend;
-use orbit_core::scene::SceneCfg;
+use orbit_core::scene::{SceneCfg, SceneDesc};
 use serde::Deserialize;
 
 use crate::scenes::{build, floating_ant, ground, resolve};
@@ -26,8 +29,15 @@ struct Record {
     joint_pos: Vec<f64>,
 }
 
+/// Joint spring and damper gains of the MuJoCo model, by joint.
 #[derive(Deserialize)]
-struct AntRollout {
+struct Gains {
+    stiffness: Vec<f32>,
+    damping: Vec<f32>,
+}
+
+#[derive(Deserialize)]
+struct Rollout {
     dt: f32,
     record_every: usize,
     joints: Vec<String>,
@@ -35,6 +45,8 @@ struct AntRollout {
     first_contact: f32,
     efforts: Vec<Vec<f32>>,
     records: Vec<Record>,
+    #[serde(default)]
+    gains: Option<Gains>,
 }
 
 /// Largest differences from MuJoCo over a span of the rollout.
@@ -58,10 +70,10 @@ impl StateError {
     }
 }
 
-/// The Ant's agreement with MuJoCo: before a foot first comes within MuJoCo's contact margin
-/// (free fall, 0.29 s), and over the whole second.
+/// Agreement with a MuJoCo rollout: before MuJoCo's first contact (free fall), and over the
+/// whole rollout.
 #[derive(Clone, Copy, Debug)]
-pub struct AntAgreement {
+pub struct FreeFallAgreement {
     /// Records before the first contact.
     pub records_before_contact: usize,
     /// Largest differences before the first contact.
@@ -72,35 +84,59 @@ pub struct AntAgreement {
 
 /// Replays MuJoCo's Ant rollout: the same initial state (tilted, moving, spinning), the same
 /// joint torques every 2 ms step, on the ground plane. Prints and returns the agreement.
-pub fn ant_mujoco_rollout(backend: &str) -> AntAgreement {
-    let data: AntRollout =
-        serde_json::from_str(include_str!("../data/mujoco_ant_rollout.json")).expect("rollout");
-    let mut ant = floating_ant();
-    let init = &data.initial;
-    ant.init_state.pos = Vec3::from(init.root_pos);
-    ant.init_state.rot = Quat::from_array(init.root_quat);
-    ant.init_state.lin_vel = Vec3::from(init.lin_vel);
-    ant.init_state.ang_vel = Vec3::from(init.ang_vel);
-    ant.init_state.joint_pos = data
-        .joints
-        .iter()
-        .zip(&init.joint_pos)
-        .map(|(name, &q)| (format!("^{name}$"), q))
-        .collect();
+pub fn ant_mujoco_rollout(backend: &str) -> FreeFallAgreement {
     let cfg = SceneCfg {
         env_spacing: 3.0,
-        articulations: vec![ant],
+        articulations: vec![floating_ant()],
         rigid_objects: vec![],
         static_objects: vec![ground(1.0)],
     };
-    let desc = resolve(&cfg);
+    let data = include_str!("../data/mujoco_ant_rollout.json");
+    replay("ant", backend, resolve(&cfg), data)
+}
+
+/// Replays MuJoCo's Humanoid rollout: the `humanoid` asset (its drives towards 0 are MuJoCo's
+/// joint springs and dampers) from a tilted, moving, spinning start 2 m up, under joint
+/// torques every 2 ms step, on the ground plane. Prints and returns the agreement.
+pub fn humanoid_mujoco_rollout(backend: &str) -> FreeFallAgreement {
+    let file =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../orbit-assets/assets/scenes/humanoid.ron");
+    let scene = orbit_assets::load_scene(&file, &[])
+        .unwrap_or_else(|e| panic!("the humanoid scene does not resolve: {e}"));
+    let data = include_str!("../data/mujoco_humanoid_rollout.json");
+    replay("humanoid", backend, scene, data)
+}
+
+/// Replays rollout `data` on the first articulation of `scene`, from the rollout's initial
+/// state.
+fn replay(name: &str, backend: &str, mut scene: SceneDesc, data: &str) -> FreeFallAgreement {
+    let data: Rollout = serde_json::from_str(data).expect("rollout");
+    let init = &data.initial;
+    let robot = &mut scene.articulations[0];
     assert_eq!(
-        desc.articulations[0].model.joint_names(),
+        robot.model.joint_names(),
         data.joints,
-        "the Ant's joints in MuJoCo's order"
+        "the {name}'s joints in MuJoCo's order"
     );
-    let mut sim = build(backend, &desc, 1, data.dt);
-    let mut agreement = AntAgreement {
+    robot.root_pose = Pose::new(Vec3::from(init.root_pos), Quat::from_array(init.root_quat));
+    robot.root_lin_vel = Vec3::from(init.lin_vel);
+    robot.root_ang_vel = Vec3::from(init.ang_vel);
+    robot.default_joint_pos = init.joint_pos.clone();
+    if let Some(gains) = &data.gains {
+        for (d, drive) in robot.drives.iter().enumerate() {
+            assert_eq!(
+                (drive.stiffness, drive.damping),
+                (gains.stiffness[d], gains.damping[d]),
+                "joint `{}`: the asset's drive gains against MuJoCo's spring and damper",
+                data.joints[d]
+            );
+        }
+    }
+    let mut sim = build(backend, &scene, 1, data.dt);
+    // MuJoCo's springs pull towards 0, not towards the start.
+    let zeros = vec![0.0; data.joints.len()];
+    sim.set_joint_position_targets(0, &zeros).expect("targets");
+    let mut agreement = FreeFallAgreement {
         records_before_contact: 0,
         before_contact: StateError::default(),
         whole: StateError::default(),
@@ -119,7 +155,7 @@ pub fn ant_mujoco_rollout(backend: &str) -> AntAgreement {
             agreement.before_contact = agreement.before_contact.max(error);
         }
     }
-    println!("ant_mujoco_rollout[{backend}]: {agreement:?}");
+    println!("{name}_mujoco_rollout[{backend}]: {agreement:?}");
     agreement
 }
 
@@ -150,8 +186,21 @@ fn state_error(sim: &dyn PhysicsBackend, record: &Record) -> StateError {
 /// After landing the contact models differ (MuJoCo's geoms touch from 1 cm away), so the whole
 /// rollout is reported, not asserted.
 pub fn ant_tracks_mujoco_rollout(backend: &str, tolerance: StateError) {
-    let a = ant_mujoco_rollout(backend);
-    assert!(a.records_before_contact >= 20, "the fall spans 0.2 s");
+    assert_agreement(ant_mujoco_rollout(backend), tolerance, 20);
+}
+
+/// Asserts the Humanoid's agreement with MuJoCo in free fall, before its first contact (self
+/// contacts included), within `tolerance`; the whole rollout is reported, not asserted.
+pub fn humanoid_tracks_mujoco_rollout(backend: &str, tolerance: StateError) {
+    assert_agreement(humanoid_mujoco_rollout(backend), tolerance, 20);
+}
+
+/// Asserts `a` within `tolerance` over at least `records` records before the first contact.
+fn assert_agreement(a: FreeFallAgreement, tolerance: StateError, records: usize) {
+    assert!(
+        a.records_before_contact >= records,
+        "the fall spans {records} records"
+    );
     let (e, tol) = (a.before_contact, tolerance);
     assert!(
         e.root_pos <= tol.root_pos,
