@@ -19,6 +19,7 @@ pub use orbit_task_ant as task_ant;
 pub use orbit_task_box_pushing as task_box_pushing;
 pub use orbit_task_box_to_spot as task_box_to_spot;
 pub use orbit_task_cartpole as task_cartpole;
+pub use orbit_task_humanoid as task_humanoid;
 pub use orbit_task_reach as task_reach;
 
 /// Builds a registered task (`BoxPushing-Torque-Franka-v0`, …) with config overrides; linking
@@ -73,6 +74,7 @@ pub fn link_registrations() {
         task_reach::TASK_ID,
         task_cartpole::TASK_ID,
         task_ant::TASK_ID,
+        task_humanoid::TASK_ID,
     );
 }
 

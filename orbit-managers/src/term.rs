@@ -112,7 +112,7 @@ pub enum JointActionKind {
 }
 
 /// How a joint action term maps raw actions onto joints: for action `k`,
-/// `processed = clip(raw) · scale + offsets[k]` drives dof `dofs[k]` of `articulation`.
+/// `processed = clip(raw) · scales[k] + offsets[k]` drives dof `dofs[k]` of `articulation`.
 #[derive(Clone, Copy, Debug)]
 pub struct JointActionMap<'a> {
     /// Position targets or efforts.
@@ -121,8 +121,8 @@ pub struct JointActionMap<'a> {
     pub articulation: usize,
     /// Dofs of the articulation, one per action value.
     pub dofs: &'a [usize],
-    /// Scale of the raw action.
-    pub scale: f32,
+    /// Scale of the raw action, per action value.
+    pub scales: &'a [f32],
     /// Offset per action value.
     pub offsets: &'a [f32],
     /// Range the raw action is clipped to first, if any.

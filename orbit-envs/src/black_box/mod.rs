@@ -140,7 +140,9 @@ impl BlackBoxEnv {
                      wrapper needs `joint_position` or `joint_effort` actions"
                 ))
             })?;
-            if position_controller && (map.kind != JointActionKind::Position || map.scale == 0.0) {
+            if position_controller
+                && (map.kind != JointActionKind::Position || map.scales.contains(&0.0))
+            {
                 return Err(invalid(
                     file,
                     "controller",
@@ -150,9 +152,9 @@ impl BlackBoxEnv {
                     ),
                 ));
             }
-            for (&j, &o) in map.dofs.iter().zip(map.offsets) {
+            for ((&j, &o), &s) in map.dofs.iter().zip(map.offsets).zip(map.scales) {
                 joints.push((map.articulation, j));
-                scale.push(map.scale);
+                scale.push(s);
                 offset.push(o);
             }
         }

@@ -1,6 +1,7 @@
 //! Action terms: joint position and joint effort.
 use super::*;
 use orbit_core::parallel::MIN_ENVS_PER_COPY_TASK;
+use orbit_core::scene::PerJoint;
 use rayon::prelude::*;
 
 /// Parameters of joint actions: `processed = raw · scale + offset`.
@@ -13,9 +14,10 @@ pub struct JointActionParams {
     /// Joint-name regexes.
     #[serde(default = "all_joints")]
     pub joint_names: Vec<String>,
-    /// Scale.
+    /// Scale: one for every joint, or by joint-name regex (Isaac Lab's `scale` dict; every
+    /// selected joint must match one).
     #[serde(default = "one")]
-    pub scale: f32,
+    pub scale: PerJoint,
     /// Offset.
     #[serde(default)]
     pub offset: f32,
@@ -35,8 +37,8 @@ pub struct JointActionParams {
     pub effort_clip: Option<Vec<f32>>,
 }
 
-fn one() -> f32 {
-    1.0
+fn one() -> PerJoint {
+    PerJoint::All(1.0)
 }
 
 impl Default for JointActionParams {
@@ -44,7 +46,7 @@ impl Default for JointActionParams {
         Self {
             asset: robot(),
             joint_names: all_joints(),
-            scale: 1.0,
+            scale: one(),
             offset: 0.0,
             use_default_offset: false,
             clip: None,
@@ -59,6 +61,8 @@ struct JointAction {
     kind: JointActionKind,
     sel: JointSel,
     p: JointActionParams,
+    /// Scale per action value.
+    scales: Vec<f32>,
     offsets: Vec<f32>,
     processed: Vec<f32>,
     /// Full `num_envs × num_dofs` target/effort buffer.
@@ -75,18 +79,20 @@ impl ActionTerm for JointAction {
     }
 
     fn process(&mut self, _scene: &Scene, raw: &[f32]) {
-        let (d, p, offsets) = (self.dim().max(1), &self.p, &self.offsets);
+        let (d, p) = (self.dim().max(1), &self.p);
+        let (scales, offsets) = (&self.scales, &self.offsets);
         self.processed
             .par_chunks_mut(d)
             .with_min_len(MIN_ENVS_PER_COPY_TASK)
             .zip(raw.par_chunks(d))
             .for_each(|(out, raw)| {
-                for ((o, &a), &offset) in out.iter_mut().zip(raw).zip(offsets) {
+                for (((o, &a), &scale), &offset) in out.iter_mut().zip(raw).zip(scales).zip(offsets)
+                {
                     let a = match p.clip {
                         Some((lo, hi)) => a.clamp(lo, hi),
                         None => a,
                     };
-                    *o = a * p.scale + offset;
+                    *o = a * scale + offset;
                 }
             });
     }
@@ -143,7 +149,7 @@ impl ActionTerm for JointAction {
             kind: self.kind,
             articulation: self.sel.articulation,
             dofs: &self.sel.dofs,
-            scale: self.p.scale,
+            scales: &self.scales,
             offsets: &self.offsets,
             clip: self.p.clip,
         })
@@ -171,6 +177,7 @@ fn joint_action(
             lim.len()
         )));
     }
+    let scales = action_scales(ctx, &sel, &p.scale)?;
     let defaults = &ctx.scene.desc.articulations[sel.articulation].default_joint_pos;
     let offsets = sel
         .dofs
@@ -209,8 +216,42 @@ fn joint_action(
         processed: vec![0.0; n * d],
         sel,
         p,
+        scales,
         offsets,
     }))
+}
+
+/// The scale of each selected joint.
+fn action_scales(
+    ctx: &TermContext<'_>,
+    sel: &JointSel,
+    scale: &PerJoint,
+) -> Result<Vec<f32>, EnvError> {
+    let by_name = match scale {
+        PerJoint::All(v) => return Ok(vec![*v; sel.dofs.len()]),
+        PerJoint::ByName(m) => m,
+    };
+    let field = format!("{}.params.scale", ctx.field);
+    let mut per_dof = vec![None; sel.num_dofs];
+    for (pattern, &v) in by_name {
+        for j in (ctx.scene).joints(&field, sel.articulation, std::slice::from_ref(pattern))? {
+            per_dof[j] = Some(v);
+        }
+    }
+    let names = &ctx.scene.desc.articulations[sel.articulation]
+        .model
+        .joint_names();
+    sel.dofs
+        .iter()
+        .map(|&j| {
+            per_dof[j].ok_or_else(|| {
+                ctx.error(format!(
+                    "params.scale has no entry matching joint `{}`; add one",
+                    names[j]
+                ))
+            })
+        })
+        .collect()
 }
 
 inventory::submit! { ActionTermDef { name: "joint_position", build: |c| joint_action(c, JointActionKind::Position) } }
