@@ -117,9 +117,7 @@ var<private> l_r: array<f32, ND1>;
 var<private> l_lam: array<f32, ND1>;
 var<private> l_slot: array<u32, ND1>;
 // Arm rows: J_arm and W of contact c's direction d at row 3c + d, of limit l at row 3 MAX_C + l
-// (ND1 floats each).
-var<private> r_j: array<f32, RMAX * ND1>;
-var<private> r_w: array<f32, RMAX * ND1>;
+// (ND1 floats each), in `r_j` and `r_w` or in the `rows` buffer (generated with their accessors).
 
 const ROW_ARM: u32 = 4u;
 // Velocities at the start of the substep: MuJoCo's reference acceleration
@@ -891,15 +889,6 @@ fn contact_object_vel0(info: u32, pa: vec3<f32>, pb: vec3<f32>) -> vec3<f32> {
         v -= ovel0[ob] + cross(oang0[ob], pb);
     }
     return v;
-}
-
-// J_arm q̇ at the start of the substep of the row at `base`.
-fn arm_dot0(base: u32) -> f32 {
-    var s = 0.0;
-    for (var d = 0u; d < ND1; d++) {
-        s += r_j[base + d] * qd0[d];
-    }
-    return s;
 }
 
 // Applies the world impulse `impulse` (side a; −impulse on side b) of contact c to its free

@@ -103,6 +103,8 @@ impl WgpuBackend {
             .max(buffers.inputs_len)
             .max(buffers.warm_len) as u64
             * 4;
+        let rows = codegen::row_storage_floats(&scene, num_envs).unwrap_or(0) as u64 * 4;
+        let largest = largest.max(rows);
         let max_binding = limits.max_storage_buffer_binding_size;
         if largest > max_binding.min(limits.max_buffer_size) {
             return Err(err(format!(
@@ -141,6 +143,9 @@ impl WgpuBackend {
         let lay_buf = storage("orbit layout", table.len());
         gpu.queue
             .write_buffer(&lay_buf, 0, bytemuck::cast_slice(&table));
+        // (The bind group keeps the buffer alive.)
+        let rows_buf =
+            codegen::row_storage_floats(&scene, num_envs).map(|n| storage("orbit rows", n));
         let geometry_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("orbit geometry"),
             size: geometry_bytes,
@@ -195,7 +200,13 @@ impl WgpuBackend {
                     binding: 5,
                     resource: geometry_buf.as_entire_binding(),
                 },
-            ],
+            ]
+            .into_iter()
+            .chain(rows_buf.as_ref().map(|buf| wgpu::BindGroupEntry {
+                binding: 6,
+                resource: buf.as_entire_binding(),
+            }))
+            .collect::<Vec<_>>(),
         });
         let default_masses = scene
             .links

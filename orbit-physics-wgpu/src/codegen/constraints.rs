@@ -4,6 +4,7 @@
 use std::fmt::Write as _;
 
 use super::{Gen, f};
+use crate::compile::{CompiledScene, MAX_CONTACTS};
 
 /// Up to this many dofs each joint-limit row is built where its joint is tested; beyond, the
 /// tests list the rows and one loop builds them. Building a row inlines a solve with the
@@ -72,12 +73,14 @@ impl Gen<'_> {
         self.line("return false;");
         self.close();
         self.line("");
+        let (rj, rw) = self.row_storage();
+        let (rj, rw) = (|i: &str| rj.replace('#', i), |i: &str| rw.replace('#', i));
         self.line("// Stores a row's arm Jacobian and W = A⁻¹ Jᵀ at `base`; returns J W.");
         self.open("fn arm_store(base: u32, jt: array<f32, ND1>, w: array<f32, ND1>) -> f32");
         let mut jw = String::from("0.0");
         for d in 0..nd {
-            self.line(format!("r_j[base + {d}u] = jt[{d}];"));
-            self.line(format!("r_w[base + {d}u] = w[{d}];"));
+            self.line(format!("{} = jt[{d}];", rj(&format!("base + {d}u"))));
+            self.line(format!("{} = w[{d}];", rw(&format!("base + {d}u"))));
             write!(jw, " + jt[{d}] * w[{d}]").expect("write to string");
         }
         self.line(format!("return {jw};"));
@@ -87,7 +90,7 @@ impl Gen<'_> {
         self.open("fn arm_dot(base: u32) -> f32");
         let mut dot = String::from("0.0");
         for d in 0..nd {
-            write!(dot, " + r_j[base + {d}u] * qd[{d}]").expect("write to string");
+            write!(dot, " + {} * qd[{d}]", rj(&format!("base + {d}u"))).expect("write to string");
         }
         self.line(format!("return {dot};"));
         self.close();
@@ -95,10 +98,35 @@ impl Gen<'_> {
         self.line("// q̇ += W x for the row at `base`.");
         self.open("fn arm_axpy(base: u32, x: f32)");
         for d in 0..nd {
-            self.line(format!("qd[{d}] += r_w[base + {d}u] * x;"));
+            self.line(format!("qd[{d}] += {} * x;", rw(&format!("base + {d}u"))));
         }
         self.close();
         self.line("");
+        self.line("// J_arm q̇ at the start of the substep of the row at `base`.");
+        self.open("fn arm_dot0(base: u32) -> f32");
+        self.line("var s = 0.0;");
+        self.open("for (var d = 0u; d < ND1; d++)");
+        self.line(format!("s += {} * qd0[d];", rj("base + d")));
+        self.close();
+        self.line("return s;");
+        self.close();
+        self.line("");
+    }
+
+    /// Where the rows' arm Jacobians and `W = A⁻¹ Jᵀ` live, as WGSL expressions of an index
+    /// `#`: private arrays, or beyond [`PRIVATE_ROW_DOFS`] dofs the `rows` storage buffer.
+    fn row_storage(&mut self) -> (String, String) {
+        if row_storage_floats(self.scene, 1).is_none() {
+            self.line("var<private> r_j: array<f32, RMAX * ND1>;");
+            self.line("var<private> r_w: array<f32, RMAX * ND1>;");
+            return ("r_j[#]".into(), "r_w[#]".into());
+        }
+        self.line("// Rows of every env, env-interleaved: J_arm, then W.");
+        self.line("@group(0) @binding(6) var<storage, read_write> rows: array<f32>;");
+        (
+            "rows[(#) * num_envs + env]".into(),
+            "rows[(RMAX * ND1 + #) * num_envs + env]".into(),
+        )
     }
 
     /// Joint-limit rows for joints that could reach a limit within this substep: each row built
@@ -188,4 +216,16 @@ impl Gen<'_> {
         self.close();
         self.line("");
     }
+}
+
+/// Beyond this many dofs the rows' arm Jacobians and `W = A⁻¹ Jᵀ` live in a storage buffer:
+/// in private memory they are `2 (3 C + n) n` floats a thread, more than NVIDIA's driver builds
+/// a kernel with at the Humanoid's 27 dofs (docs/experiments/large-kernels.md).
+const PRIVATE_ROW_DOFS: usize = 16;
+
+/// Floats of the `rows` storage buffer for `num_envs` envs, or `None` where the rows live in
+/// private memory.
+pub fn row_storage_floats(scene: &CompiledScene, num_envs: usize) -> Option<usize> {
+    let nd = scene.dofs.len();
+    (nd > PRIVATE_ROW_DOFS).then(|| 2 * (3 * MAX_CONTACTS + nd) * nd * num_envs)
 }

@@ -17,6 +17,8 @@
 mod articulation;
 mod constants;
 mod constraints;
+
+pub(crate) use constraints::row_storage_floats;
 mod integrate;
 mod objects;
 mod state_io;
