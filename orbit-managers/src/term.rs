@@ -31,6 +31,11 @@ pub struct TermContext<'a> {
 }
 
 impl TermContext<'_> {
+    /// The articulation a term's `params.asset` names.
+    pub fn articulation(&self, asset: &str) -> Result<usize, EnvError> {
+        (self.scene).articulation(&format!("{}.params.asset", self.field), asset)
+    }
+
     /// Deserialises the parameters (absent parameters give `P::default()`).
     pub fn params<P: DeserializeOwned + Default>(&self) -> Result<P, EnvError> {
         match self.params {

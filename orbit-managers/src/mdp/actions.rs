@@ -231,13 +231,7 @@ fn action_scales(
         PerJoint::All(v) => return Ok(vec![*v; sel.dofs.len()]),
         PerJoint::ByName(m) => m,
     };
-    let field = format!("{}.params.scale", ctx.field);
-    let mut per_dof = vec![None; sel.num_dofs];
-    for (pattern, &v) in by_name {
-        for j in (ctx.scene).joints(&field, sel.articulation, std::slice::from_ref(pattern))? {
-            per_dof[j] = Some(v);
-        }
-    }
+    let per_dof = values_by_joint(ctx, "scale", sel.articulation, by_name)?;
     let names = &ctx.scene.desc.articulations[sel.articulation]
         .model
         .joint_names();

@@ -70,9 +70,7 @@ fn base_state(
     quantity: BaseQuantity,
 ) -> Result<Box<dyn ObservationTerm>, EnvError> {
     let p: BaseParams = ctx.params()?;
-    let articulation = ctx
-        .scene
-        .articulation(&format!("{}.params.asset", ctx.field), &p.asset)?;
+    let articulation = ctx.articulation(&p.asset)?;
     Ok(Box::new(BaseState {
         articulation,
         quantity,
@@ -125,6 +123,6 @@ inventory::submit! { TerminationTermDef { name: "root_height_below_minimum", bui
     if !p.minimum_height.is_finite() {
         return Err(c.error(format!("params.minimum_height must be a finite height in metres, got {}", p.minimum_height)));
     }
-    let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
+    let articulation = c.articulation(&p.asset)?;
     Ok(Box::new(RootHeightBelowMinimum { articulation, minimum: p.minimum_height }))
 } } }

@@ -118,9 +118,7 @@ fn heading_obs(
     quantity: HeadingObs,
 ) -> Result<Box<dyn ObservationTerm>, EnvError> {
     let p: TargetParams = ctx.params()?;
-    let articulation = ctx
-        .scene
-        .articulation(&format!("{}.params.asset", ctx.field), &p.asset)?;
+    let articulation = ctx.articulation(&p.asset)?;
     Ok(Box::new(HeadingTerm {
         articulation,
         target: p.target_pos,
@@ -180,7 +178,7 @@ impl RewardTerm for Progress {
 
 inventory::submit! { RewardTermDef { name: "progress_reward", build: |c| {
     let p: TargetParams = c.params()?;
-    let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
+    let articulation = c.articulation(&p.asset)?;
     let n = c.scene.num_envs();
     let mut term = Progress { articulation, target: p.target_pos, step_dt: c.step_dt, step: None, before: vec![0.0; n], now: vec![0.0; n] };
     term.reset(c.scene, &(0..n).collect::<Vec<_>>());
@@ -256,9 +254,7 @@ impl RewardTerm for Bonus {
 fn bonus(ctx: &TermContext<'_>, upright: bool) -> Result<Box<dyn RewardTerm>, EnvError> {
     let p: BonusParams = ctx.params()?;
     let threshold = threshold(ctx, p.threshold, |t| t > 0.0 && t <= 1.0, "(0, 1]")?;
-    let articulation = ctx
-        .scene
-        .articulation(&format!("{}.params.asset", ctx.field), &p.asset)?;
+    let articulation = ctx.articulation(&p.asset)?;
     Ok(Box::new(Bonus {
         articulation,
         target: p.target_pos,
@@ -322,22 +318,18 @@ fn scaled_gears(
     articulation: usize,
     gear_ratio: &BTreeMap<String, f32>,
 ) -> Result<Vec<f32>, EnvError> {
-    let n = ctx.scene.backend.layout().articulations[articulation].num_dofs();
-    let mut gears = vec![1.0f32; n];
-    for (pattern, &gear) in gear_ratio {
-        if !(gear.is_finite() && gear > 0.0) {
-            return Err(ctx.error(format!(
-                "params.gear_ratio[{pattern:?}] must be positive, got {gear}"
-            )));
-        }
-        let field = format!("{}.params.gear_ratio", ctx.field);
-        for j in ctx
-            .scene
-            .joints(&field, articulation, std::slice::from_ref(pattern))?
-        {
-            gears[j] = gear;
-        }
+    if let Some((pattern, gear)) = gear_ratio
+        .iter()
+        .find(|(_, g)| !(g.is_finite() && **g > 0.0))
+    {
+        return Err(ctx.error(format!(
+            "params.gear_ratio[{pattern:?}] must be positive, got {gear}"
+        )));
     }
+    let gears: Vec<f32> = values_by_joint(ctx, "gear_ratio", articulation, gear_ratio)?
+        .into_iter()
+        .map(|g| g.unwrap_or(1.0))
+        .collect();
     let max = gears.iter().copied().fold(0.0, f32::max);
     Ok(gears.into_iter().map(|g| g / max).collect())
 }
@@ -363,7 +355,7 @@ impl RewardTerm for Power {
 
 inventory::submit! { RewardTermDef { name: "power_consumption", build: |c| {
     let p: GearParams = c.params()?;
-    let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
+    let articulation = c.articulation(&p.asset)?;
     let weights = scaled_gears(c, articulation, &p.gear_ratio)?;
     if c.action_dim != weights.len() {
         return Err(c.error(format!(
@@ -406,7 +398,7 @@ impl RewardTerm for LimitsRatio {
 inventory::submit! { RewardTermDef { name: "joint_pos_limits_penalty_ratio", build: |c| {
     let p: LimitsRatioParams = c.params()?;
     let threshold = threshold(c, p.threshold, |t| (0.0..1.0).contains(&t), "[0, 1)")?;
-    let articulation = c.scene.articulation(&format!("{}.params.asset", c.field), &p.asset)?;
+    let articulation = c.articulation(&p.asset)?;
     let weights = scaled_gears(c, articulation, &p.gear_ratio)?;
     let n = weights.len();
     let sel = JointSel { articulation, dofs: (0..n).collect(), num_dofs: n };

@@ -86,9 +86,7 @@ impl JointSel {
 
     /// Resolves a joint selection for a term.
     pub fn resolve(ctx: &TermContext<'_>, p: &JointsParams) -> Result<Self, EnvError> {
-        let articulation = ctx
-            .scene
-            .articulation(&format!("{}.params.asset", ctx.field), &p.asset)?;
+        let articulation = ctx.articulation(&p.asset)?;
         let dofs = ctx.scene.joints(
             &format!("{}.params.joint_names", ctx.field),
             articulation,
@@ -112,6 +110,25 @@ impl JointSel {
             .set_bias_compensation(self.articulation, &self.dofs, true)?;
         Ok(())
     }
+}
+
+/// Each dof of `articulation` with the value of the last regex of `values` (the term's
+/// `params.<param>`) that matches its joint, `None` where none does.
+pub fn values_by_joint(
+    ctx: &TermContext<'_>,
+    param: &str,
+    articulation: usize,
+    values: &std::collections::BTreeMap<String, f32>,
+) -> Result<Vec<Option<f32>>, EnvError> {
+    let field = format!("{}.params.{param}", ctx.field);
+    let n = ctx.scene.desc.articulations[articulation].num_dofs();
+    let mut per_dof = vec![None; n];
+    for (pattern, &v) in values {
+        for j in (ctx.scene).joints(&field, articulation, std::slice::from_ref(pattern))? {
+            per_dof[j] = Some(v);
+        }
+    }
+    Ok(per_dof)
 }
 
 /// Position limits `(lower, upper)` of the listed dofs (`±inf` for an unlimited joint).

@@ -228,9 +228,11 @@ impl Gen<'_> {
                 }
             }
         }
-        // Dofs of one articulation off each other's chain: structural zeros of the factor's
-        // dense block. Entries across articulations are never read.
-        for i in 0..nd {
+        // Dofs of one articulation off each other's chain: structural zeros of the dense
+        // Cholesky block. Entries across articulations, and for the tree factorisation any
+        // entry off a chain, are never read.
+        let dense = nd <= UNROLLED_DOFS;
+        for i in (0..nd).filter(|_| dense) {
             let (d0, _) = self.dof_block(i);
             for j in d0..i {
                 if !set[i * nd + j] {
