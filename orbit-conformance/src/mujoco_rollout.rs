@@ -92,24 +92,31 @@ pub fn ant_mujoco_rollout(backend: &str) -> FreeFallAgreement {
         static_objects: vec![ground(1.0)],
     };
     let data = include_str!("../data/mujoco_ant_rollout.json");
-    replay("ant", backend, resolve(&cfg), data)
+    replay("ant", backend, resolve(&cfg), data, Vec3::ZERO)
 }
 
 /// Replays MuJoCo's Humanoid rollout: the `humanoid` asset (its drives towards 0 are MuJoCo's
 /// joint springs and dampers) from a tilted, moving, spinning start 2 m up, under joint
-/// torques every 2 ms step, on the ground plane. Prints and returns the agreement.
-pub fn humanoid_mujoco_rollout(backend: &str) -> FreeFallAgreement {
+/// torques every 2 ms step, on the ground plane, with the robot moved by `offset` in its env
+/// (MuJoCo's positions are compared moved by it). Prints and returns the agreement.
+pub fn humanoid_mujoco_rollout(backend: &str, offset: Vec3) -> FreeFallAgreement {
     let file =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../orbit-assets/assets/scenes/humanoid.ron");
     let scene = orbit_assets::load_scene(&file, &[])
         .unwrap_or_else(|e| panic!("the humanoid scene does not resolve: {e}"));
     let data = include_str!("../data/mujoco_humanoid_rollout.json");
-    replay("humanoid", backend, scene, data)
+    replay("humanoid", backend, scene, data, offset)
 }
 
 /// Replays rollout `data` on the first articulation of `scene`, from the rollout's initial
-/// state.
-fn replay(name: &str, backend: &str, mut scene: SceneDesc, data: &str) -> FreeFallAgreement {
+/// state moved by `offset`.
+fn replay(
+    name: &str,
+    backend: &str,
+    mut scene: SceneDesc,
+    data: &str,
+    offset: Vec3,
+) -> FreeFallAgreement {
     let data: Rollout = serde_json::from_str(data).expect("rollout");
     let init = &data.initial;
     let robot = &mut scene.articulations[0];
@@ -118,7 +125,8 @@ fn replay(name: &str, backend: &str, mut scene: SceneDesc, data: &str) -> FreeFa
         data.joints,
         "the {name}'s joints in MuJoCo's order"
     );
-    robot.root_pose = Pose::new(Vec3::from(init.root_pos), Quat::from_array(init.root_quat));
+    let start = Vec3::from(init.root_pos) + offset;
+    robot.root_pose = Pose::new(start, Quat::from_array(init.root_quat));
     robot.root_lin_vel = Vec3::from(init.lin_vel);
     robot.root_ang_vel = Vec3::from(init.ang_vel);
     robot.default_joint_pos = init.joint_pos.clone();
@@ -148,21 +156,21 @@ fn replay(name: &str, backend: &str, mut scene: SceneDesc, data: &str) -> FreeFa
             continue;
         }
         let record = &data.records[(k + 1) / data.record_every - 1];
-        let error = state_error(&*sim, record);
+        let error = state_error(&*sim, record, offset);
         agreement.whole = agreement.whole.max(error);
         if record.t < data.first_contact {
             agreement.records_before_contact += 1;
             agreement.before_contact = agreement.before_contact.max(error);
         }
     }
-    println!("{name}_mujoco_rollout[{backend}]: {agreement:?}");
+    println!("{name}_mujoco_rollout[{backend}] at {offset}: {agreement:?}");
     agreement
 }
 
-fn state_error(sim: &dyn PhysicsBackend, record: &Record) -> StateError {
+fn state_error(sim: &dyn PhysicsBackend, record: &Record, offset: Vec3) -> StateError {
     let view = sim.articulation(0);
     let pos = view.link_pos[0].as_dvec3();
-    let want = glam::DVec3::from(record.root_pos);
+    let want = glam::DVec3::from(record.root_pos) + offset.as_dvec3();
     let want_rot = glam::DQuat::from_array(record.root_quat).normalize();
     // The relative rotation's angle from its sine and cosine halves: `acos` of a dot product
     // near 1 would lose half the digits.
@@ -174,10 +182,13 @@ fn state_error(sim: &dyn PhysicsBackend, record: &Record) -> StateError {
         .zip(&record.joint_pos)
         .map(|(&q, &r)| (f64::from(q) - r).abs())
         .fold(0.0, f64::max);
+    // A NaN is the largest difference, not one that `max` skips.
+    let nan_as_inf = |x: f64| if x.is_nan() { f64::INFINITY } else { x };
+    let joint_nan = view.joint_pos.iter().any(|q| q.is_nan());
     StateError {
-        root_pos: (pos - want).length(),
-        root_rot,
-        joint_pos,
+        root_pos: nan_as_inf((pos - want).length()),
+        root_rot: nan_as_inf(root_rot),
+        joint_pos: if joint_nan { f64::INFINITY } else { joint_pos },
     }
 }
 
@@ -192,7 +203,22 @@ pub fn ant_tracks_mujoco_rollout(backend: &str, tolerance: StateError) {
 /// Asserts the Humanoid's agreement with MuJoCo in free fall, before its first contact (self
 /// contacts included), within `tolerance`; the whole rollout is reported, not asserted.
 pub fn humanoid_tracks_mujoco_rollout(backend: &str, tolerance: StateError) {
-    assert_agreement(humanoid_mujoco_rollout(backend), tolerance, 20);
+    assert_agreement(humanoid_mujoco_rollout(backend, Vec3::ZERO), tolerance, 20);
+}
+
+/// Where a robot has walked to in its env does not change its dynamics: the Humanoid's MuJoCo
+/// rollout, started 180 m from the env origin (a trained Humanoid runs 100 m and more in an
+/// episode), agrees with MuJoCo before the first contact within the `tolerance` that holds at
+/// the origin, the root's position within `tolerance.root_pos` plus 2e-4 m: positions are
+/// f32, 1.5e-5 m apart at 180 m, and the fall's 235 steps round the root's position once
+/// each.
+pub fn humanoid_tracks_mujoco_rollout_far_from_origin(backend: &str, tolerance: StateError) {
+    let offset = Vec3::new(150.0, -100.0, 0.0);
+    let tolerance = StateError {
+        root_pos: tolerance.root_pos + 2e-4,
+        ..tolerance
+    };
+    assert_agreement(humanoid_mujoco_rollout(backend, offset), tolerance, 20);
 }
 
 /// Asserts `a` within `tolerance` over at least `records` records before the first contact.

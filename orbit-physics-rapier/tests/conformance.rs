@@ -114,13 +114,22 @@ fn substeps_after_a_write_do_not_depend_on_dispatch() {
     orbit_conformance::substeps_after_a_write_do_not_depend_on_dispatch(BACKEND_NAME);
 }
 
+/// As for the Ant: in a fall of 0.47 s the two Euler variants part by g t h / 2 = 4.6 mm.
+const HUMANOID_TOLERANCE: orbit_conformance::StateError = orbit_conformance::StateError {
+    root_pos: 6e-3,
+    root_rot: 1e-3,
+    joint_pos: 2e-3,
+};
+
 #[test]
 fn humanoid_tracks_mujoco_rollout() {
-    // As for the Ant: in a fall of 0.47 s the two Euler variants part by g t h / 2 = 4.6 mm.
-    let tolerance = orbit_conformance::StateError {
-        root_pos: 6e-3,
-        root_rot: 1e-3,
-        joint_pos: 2e-3,
-    };
-    orbit_conformance::humanoid_tracks_mujoco_rollout(BACKEND_NAME, tolerance);
+    orbit_conformance::humanoid_tracks_mujoco_rollout(BACKEND_NAME, HUMANOID_TOLERANCE);
+}
+
+#[test]
+fn humanoid_tracks_mujoco_rollout_far_from_origin() {
+    orbit_conformance::humanoid_tracks_mujoco_rollout_far_from_origin(
+        BACKEND_NAME,
+        HUMANOID_TOLERANCE,
+    );
 }

@@ -491,6 +491,9 @@ fn shape_pose(s: u32) -> ShapePose {
     var out: ShapePose;
     if b < 0 {
         out.pos = geo[e].xyz;
+        if SHIFTED {
+            out.pos -= shift;
+        }
         out.rot = geo[e + 1u];
     } else {
         out.pos = bpos[b] + qrot(brot[b], geo[e].xyz);
@@ -502,7 +505,10 @@ fn shape_pose(s: u32) -> ShapePose {
 // False only if a sphere (c, r) is farther than the margin from fixed shape s.
 fn near_fixed(s: u32, c: vec3<f32>, r: f32) -> bool {
     let e = GEO_SHAPES + 4u * s;
-    let pos = geo[e].xyz;
+    var pos = geo[e].xyz;
+    if SHIFTED {
+        pos -= shift;
+    }
     let rot = geo[e + 1u];
     let size = geo[e + 2u];
     let kind = u32(geo[e + 3u].x);

@@ -187,16 +187,27 @@ fn ant_tracks_mujoco_rollout() {
     }
 }
 
+/// The drives towards 0 integrate their springs implicitly, MuJoCo's joint springs are
+/// explicit: the joints part by up to 1e-3 rad in the 0.47 s fall.
+const HUMANOID_TOLERANCE: orbit_conformance::StateError = orbit_conformance::StateError {
+    root_pos: 1e-4,
+    root_rot: 1e-3,
+    joint_pos: 3e-3,
+};
+
 #[test]
 fn humanoid_tracks_mujoco_rollout() {
     if gpu_available() {
-        // The drives towards 0 integrate their springs implicitly, MuJoCo's joint springs are
-        // explicit: the joints part by up to 1e-3 rad in the 0.47 s fall.
-        let tolerance = orbit_conformance::StateError {
-            root_pos: 1e-4,
-            root_rot: 1e-3,
-            joint_pos: 3e-3,
-        };
-        orbit_conformance::humanoid_tracks_mujoco_rollout(BACKEND_NAME, tolerance);
+        orbit_conformance::humanoid_tracks_mujoco_rollout(BACKEND_NAME, HUMANOID_TOLERANCE);
+    }
+}
+
+#[test]
+fn humanoid_tracks_mujoco_rollout_far_from_origin() {
+    if gpu_available() {
+        orbit_conformance::humanoid_tracks_mujoco_rollout_far_from_origin(
+            BACKEND_NAME,
+            HUMANOID_TOLERANCE,
+        );
     }
 }

@@ -11,7 +11,8 @@ use super::PhysicsBackend;
 pub const MAX_JOINT_POSITION: f32 = 1.0e4;
 /// Joint speeds beyond this (rad/s or m/s) mean the state blew up.
 pub const MAX_JOINT_VELOCITY: f32 = 1.0e4;
-/// Object positions farther than this from the env origin, per axis (m).
+/// Object (and floating-base link) positions farther than this from the env origin, per axis
+/// (m).
 pub const MAX_OBJECT_POSITION: f32 = 1.0e3;
 /// Object speeds beyond this, per axis (m/s).
 pub const MAX_OBJECT_LINEAR_VELOCITY: f32 = 1.0e3;
@@ -45,9 +46,10 @@ impl std::fmt::Display for Instability {
     }
 }
 
-/// The first out-of-range quantity in `backend`'s joint states and free-object states, if any.
-/// Scans on every core; finds the same one whatever the number of threads. Link poses are
-/// not scanned: they follow from the joint states.
+/// The first out-of-range quantity in `backend`'s joint states, floating bases' link states
+/// and free-object states, if any. Scans on every core; finds the same one whatever the
+/// number of threads. A fixed-base articulation's link poses are not scanned: they follow
+/// from its joint states.
 pub fn check_state(backend: &dyn PhysicsBackend) -> Option<Instability> {
     let layout = backend.layout();
     let num_envs = backend.num_envs();
@@ -63,6 +65,38 @@ pub fn check_state(backend: &dyn PhysicsBackend) -> Option<Instability> {
             });
             if found.is_some() {
                 return found;
+            }
+        }
+        if !art.fixed_base {
+            // A floating base's root state is not a joint state: scan the links' poses and
+            // velocities (the root's and, following it, every other link's).
+            let links = art.link_names.len();
+            let vec3s = [
+                (view.link_pos, "position", MAX_OBJECT_POSITION),
+                (
+                    view.link_lin_vel,
+                    "linear velocity",
+                    MAX_OBJECT_LINEAR_VELOCITY,
+                ),
+                (
+                    view.link_ang_vel,
+                    "angular velocity",
+                    MAX_OBJECT_ANGULAR_VELOCITY,
+                ),
+            ];
+            for (values, what, limit) in vec3s {
+                let flat: &[f32] = bytemuck::cast_slice::<Vec3, f32>(values);
+                let found = scan(flat, 3 * links, limit, num_envs, |column| {
+                    let link = &art.link_names[column / 3];
+                    let axis = ["x", "y", "z"][column % 3];
+                    format!(
+                        "{what} ({axis}) of link `{link}` of articulation `{}`",
+                        art.name
+                    )
+                });
+                if found.is_some() {
+                    return found;
+                }
             }
         }
     }
@@ -87,6 +121,44 @@ pub fn check_state(backend: &dyn PhysicsBackend) -> Option<Instability> {
         }
     }
     None
+}
+
+/// Env `e`'s articulation states, one line per joint and per floating base's root, to log
+/// with an [`Instability`]: which joints sit at a limit and how the base moves tell a stiff
+/// contact from a drive that is too strong.
+pub fn describe_env_state(backend: &dyn PhysicsBackend, e: usize) -> String {
+    use std::fmt::Write;
+    let layout = backend.layout();
+    let mut out = format!("state of env {e} after the step:");
+    for (a, art) in layout.articulations.iter().enumerate() {
+        let view = backend.articulation(a);
+        let n = art.joint_names.len();
+        if !art.fixed_base {
+            let root = e * view.num_links;
+            let q = view.link_quat[root];
+            write!(
+                out,
+                "\n  `{}` root: position {:?}, orientation (x, y, z, w) {:?}, linear velocity \
+                 {:?}, angular velocity {:?}",
+                art.name,
+                view.link_pos[root].to_array(),
+                q.to_array(),
+                view.link_lin_vel[root].to_array(),
+                view.link_ang_vel[root].to_array()
+            )
+            .expect("write to a string");
+        }
+        for (j, joint) in art.joint_names.iter().enumerate() {
+            let i = e * n + j;
+            write!(
+                out,
+                "\n  `{}` joint `{joint}`: position {}, velocity {}, applied effort {}",
+                art.name, view.joint_pos[i], view.joint_vel[i], view.applied_effort[i]
+            )
+            .expect("write to a string");
+        }
+    }
+    out
 }
 
 /// The first value of `values` (`num_envs` rows of `dim`) beyond `limit`, as an

@@ -25,6 +25,8 @@ impl Gen<'_> {
                 roots.len()
             ));
         }
+        self.line("// The env-frame position of the kernel's frame origin (zero unless SHIFTED).");
+        self.line("var<private> shift: vec3<f32>;");
         self.line(
             "// Forward kinematics, joint motion subspaces, link spatial inertias and velocities.",
         );
@@ -36,7 +38,8 @@ impl Gen<'_> {
                     continue;
                 }
                 // A fixed root is welded to the env frame: a constant pose, at rest.
-                self.line(format!("lpos[{l}] = {};", v3(link.origin.pos)));
+                let pos = v3(link.origin.pos);
+                self.line(format!("lpos[{l}] = {pos}{};", self.minus_shift()));
                 self.line(format!("lrot[{l}] = {};", q4(link.origin.rot)));
                 self.line(format!("vw[{l}] = vec3<f32>(0.0);"));
                 self.line(format!("vu[{l}] = vec3<f32>(0.0);"));

@@ -4,6 +4,25 @@
 use super::{Gen, v3};
 
 impl Gen<'_> {
+    /// ` - shift` where the kernel's frame is shifted (a floating root), else nothing: an
+    /// env-frame position into the kernel's frame.
+    pub(super) fn minus_shift(&self) -> &'static str {
+        if self.scene.free_roots().next().is_some() {
+            " - shift"
+        } else {
+            ""
+        }
+    }
+
+    /// ` + shift` where the kernel's frame is shifted: a kernel-frame position into the env's.
+    fn plus_shift(&self) -> &'static str {
+        if self.scene.free_roots().next().is_some() {
+            " + shift"
+        } else {
+            ""
+        }
+    }
+
     /// `(articulation dofs, links, local link index)` of every link, for buffer addresses.
     fn link_strides(&self) -> Vec<(usize, usize, usize)> {
         let mut out = Vec::new();
@@ -51,6 +70,13 @@ impl Gen<'_> {
             }
             self.close();
         }
+        if let Some((_, first)) = s.free_roots().next() {
+            self.line("// The kernel's frame: origin at the first floating root's centre of mass.");
+            self.line(format!("shift = fcom[{}];", first.index));
+            for (_, root) in s.free_roots() {
+                self.line(format!("fcom[{0}] = fcom[{0}] - shift;", root.index));
+            }
+        }
         for b in 0..s.num_bodies() {
             self.line(format!(
                 "mscale[{b}] = inp[lay[LAY_IN_MASS_SCALE] + env * NB + {b}u];"
@@ -69,7 +95,8 @@ impl Gen<'_> {
             }
         }
         for (o, obj) in s.objects.iter().enumerate() {
-            self.line(format!("opos[{o}] = ld3(obj_addr(0u, {o}u));"));
+            let shift = self.minus_shift();
+            self.line(format!("opos[{o}] = ld3(obj_addr(0u, {o}u)){shift};"));
             self.line(format!("orot[{o}] = normalize(ld4(obj_addr(1u, {o}u)));"));
             self.line(format!("oang[{o}] = ld3(obj_addr(3u, {o}u));"));
             self.line(
@@ -99,7 +126,7 @@ impl Gen<'_> {
         }
         for (l, &(_, links, local)) in strides.iter().enumerate().take(nl) {
             let a = |k: u32| format!("link_addr({k}u, {l}u, {links}u, {local}u)");
-            self.line(format!("st3({}, lpos[{l}]);", a(0)));
+            self.line(format!("st3({}, lpos[{l}]{});", a(0), self.plus_shift()));
             self.line(format!("st4({}, lrot[{l}]);", a(1)));
             self.line(format!(
                 "st3({}, vu[{l}] + cross(vw[{l}], lpos[{l}]));",
@@ -108,7 +135,8 @@ impl Gen<'_> {
             self.line(format!("st3({}, vw[{l}]);", a(3)));
         }
         for (o, obj) in s.objects.iter().enumerate() {
-            self.line(format!("st3(obj_addr(0u, {o}u), opos[{o}]);"));
+            let shift = self.plus_shift();
+            self.line(format!("st3(obj_addr(0u, {o}u), opos[{o}]{shift});"));
             self.line(format!("st4(obj_addr(1u, {o}u), orot[{o}]);"));
             self.line(format!(
                 "st3(obj_addr(2u, {o}u), ovel[{o}] - cross(oang[{o}], qrot(orot[{o}], {})));",
