@@ -95,10 +95,16 @@ impl VecEnv for NullEnv {
         Ok(VecEnvStep {
             rewards: &self.rewards,
             dones: &self.dones,
+            // Time-outs never happen here: every end is a termination.
+            terminated: &self.dones,
             time_outs: &self.time_outs,
             log: &self.log,
             interactions: 1,
         })
+    }
+    fn reset(&mut self) -> Result<(), VecEnvError> {
+        self.dones.fill(false);
+        Ok(())
     }
     fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), VecEnvError> {
         Ok(())

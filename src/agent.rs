@@ -19,6 +19,45 @@ pub struct AgentArgs {
     /// Config overrides `key.path=value` (or `env.key.path=value`, as `train` takes them).
     #[arg(long = "set")]
     pub overrides: Vec<String>,
+    /// Record the rollout into DIR as NumPy files: `actions` `[steps, envs, action]`,
+    /// `observations` (group `policy`, the reset's first) `[steps + 1, envs, obs]`, `rewards`,
+    /// `terminated` and `time_outs` `[steps, envs]`.
+    #[arg(long, value_name = "DIR")]
+    pub record: Option<std::path::PathBuf>,
+}
+
+/// A rollout kept for `--record`.
+#[derive(Default)]
+struct Recording {
+    actions: Vec<f32>,
+    observations: Vec<f32>,
+    rewards: Vec<f32>,
+    terminated: Vec<bool>,
+    time_outs: Vec<bool>,
+}
+
+impl Recording {
+    /// Appends the policy observations of `env` as they are now.
+    fn observe(&mut self, env: &crate::managers::ManagerBasedRlEnv) -> Result<usize, String> {
+        let (obs, dim) = env
+            .observation("policy")
+            .ok_or("the env has no `policy` observation group to record")?;
+        self.observations.extend_from_slice(obs);
+        Ok(dim)
+    }
+
+    /// Writes the files into `dir`.
+    fn save(&self, dir: &std::path::Path, n: usize, d: usize, obs: usize) -> std::io::Result<()> {
+        use crate::npy::write_npy;
+        std::fs::create_dir_all(dir)?;
+        let steps = self.rewards.len() / n;
+        write_npy(&dir.join("actions.npy"), &[steps, n, d], &self.actions)?;
+        let shape = [steps + 1, n, obs];
+        write_npy(&dir.join("observations.npy"), &shape, &self.observations)?;
+        write_npy(&dir.join("rewards.npy"), &[steps, n], &self.rewards)?;
+        write_npy(&dir.join("terminated.npy"), &[steps, n], &self.terminated)?;
+        write_npy(&dir.join("time_outs.npy"), &[steps, n], &self.time_outs)
+    }
 }
 
 /// Runs the task with uniform random actions in `[-1, 1]` (or zeros) and prints episode logs
@@ -49,6 +88,11 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
     let (n, d) = (env.num_envs(), env.action_dim());
     let mut rng = EnvRng::new(e.seed.unwrap_or(0), 0, streams::POLICY);
     let mut action = vec![0.0f32; n * d];
+    let mut recording = args.record.as_ref().map(|_| Recording::default());
+    let obs_dim = match &mut recording {
+        Some(r) => r.observe(&env)?,
+        None => 0,
+    };
     let start = std::time::Instant::now();
     let mut mean_reward = 0.0f64;
     for step in 0..args.steps {
@@ -62,6 +106,13 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
         if r.time_outs.iter().chain(r.terminated).any(|&x| x) {
             println!("step {:>5}: episode end {:?}", step + 1, r.extras.log);
         }
+        if let Some(rec) = &mut recording {
+            rec.actions.extend_from_slice(&action);
+            rec.rewards.extend_from_slice(r.reward);
+            rec.terminated.extend_from_slice(r.terminated);
+            rec.time_outs.extend_from_slice(r.time_outs);
+            rec.observe(&env)?;
+        }
     }
     let secs = start.elapsed().as_secs_f64();
     println!(
@@ -71,5 +122,13 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
         (n * args.steps) as f64 / secs,
         mean_reward / args.steps as f64
     );
+    if let (Some(rec), Some(dir)) = (&recording, &args.record) {
+        rec.save(dir, n, d, obs_dim)?;
+        println!(
+            "recorded {} steps of {n} envs into {}",
+            args.steps,
+            dir.display()
+        );
+    }
     Ok(())
 }

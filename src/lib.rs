@@ -164,6 +164,7 @@ pub fn run_overrides(
 pub mod agent;
 pub mod distributed;
 pub mod learner;
+pub mod npy;
 pub mod play;
 pub mod signals;
 pub mod train;

@@ -16,6 +16,8 @@ pub struct VecEnvStep<'a> {
     pub rewards: &'a [f32],
     /// Episode ended (terminated or timed out), one per env.
     pub dones: &'a [bool],
+    /// Episode ended by a termination term, one per env (a time-out may be set too).
+    pub terminated: &'a [bool],
     /// Episode timed out, one per env (the learner bootstraps these).
     pub time_outs: &'a [bool],
     /// Episode statistics of the envs that finished in this step (empty if none did).
@@ -43,8 +45,37 @@ pub trait VecEnv {
     /// Critic observations, `[num_envs, num_critic_obs]` (the actor's unless the env has a
     /// `critic` group).
     fn critic_observations(&self) -> &[f32];
+    /// Keeps, from the next step on, the observations each finished episode ended in (see
+    /// [`Self::final_observations`]), or stops keeping them. Off by default: it costs an
+    /// observation pass on every step in which an episode ends.
+    fn keep_final_observations(&mut self, _keep: bool) {}
+    /// Actor observations, `[num_envs, num_obs]`, as the episodes that ended in the last step
+    /// left them, before their reset; only the rows of envs whose `dones` the step set are
+    /// that step's. Terms' clip and scale apply, their noise does not. `None` unless kept, or
+    /// if the env cannot keep them.
+    fn final_observations(&self) -> Option<&[f32]> {
+        None
+    }
+    /// Critic observations as [`Self::final_observations`] has the actor's.
+    fn final_critic_observations(&self) -> Option<&[f32]> {
+        None
+    }
     /// Applies one action per env and advances one step.
     fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError>;
+    /// Resets every env and computes the first observations of their new episodes.
+    fn reset(&mut self) -> Result<(), VecEnvError>;
+    /// Steps each env has taken in its running episode.
+    fn episode_lengths(&self) -> Result<&[u32], VecEnvError> {
+        Err(VecEnvError::Mismatch(
+            "this env does not expose its episode lengths".into(),
+        ))
+    }
+    /// Moves each env to step `lengths[i]` of its episode (below the maximum length).
+    fn set_episode_lengths(&mut self, _lengths: &[u32]) -> Result<(), VecEnvError> {
+        Err(VecEnvError::Mismatch(
+            "this env's episodes cannot be moved to another step".into(),
+        ))
+    }
     /// Moves every env to a random step of its episode (uniform in `[0, max_episode_length)`),
     /// drawn from `seed`, so that time-outs spread out.
     fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), VecEnvError>;
@@ -84,8 +115,32 @@ impl<E: VecEnv + ?Sized> VecEnv for Box<E> {
         (**self).critic_observations()
     }
 
+    fn keep_final_observations(&mut self, keep: bool) {
+        (**self).keep_final_observations(keep);
+    }
+
+    fn final_observations(&self) -> Option<&[f32]> {
+        (**self).final_observations()
+    }
+
+    fn final_critic_observations(&self) -> Option<&[f32]> {
+        (**self).final_critic_observations()
+    }
+
     fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         (**self).step(actions)
+    }
+
+    fn reset(&mut self) -> Result<(), VecEnvError> {
+        (**self).reset()
+    }
+
+    fn episode_lengths(&self) -> Result<&[u32], VecEnvError> {
+        (**self).episode_lengths()
+    }
+
+    fn set_episode_lengths(&mut self, lengths: &[u32]) -> Result<(), VecEnvError> {
+        (**self).set_episode_lengths(lengths)
     }
 
     fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), VecEnvError> {
@@ -168,6 +223,21 @@ impl VecEnv for RlVecEnv {
             .0
     }
 
+    fn keep_final_observations(&mut self, keep: bool) {
+        self.env.keep_final_observations(keep);
+    }
+
+    fn final_observations(&self) -> Option<&[f32]> {
+        self.env.final_observation("policy").map(|(v, _)| v)
+    }
+
+    fn final_critic_observations(&self) -> Option<&[f32]> {
+        self.env
+            .final_observation("critic")
+            .or_else(|| self.env.final_observation("policy"))
+            .map(|(v, _)| v)
+    }
+
     fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         let r = self.env.step(actions)?;
         let mut any_done = false;
@@ -178,6 +248,7 @@ impl VecEnv for RlVecEnv {
         Ok(VecEnvStep {
             rewards: r.reward,
             dones: &self.dones,
+            terminated: r.terminated,
             time_outs: r.time_outs,
             log: if any_done {
                 &r.extras.log
@@ -186,6 +257,19 @@ impl VecEnv for RlVecEnv {
             },
             interactions: 1,
         })
+    }
+
+    fn reset(&mut self) -> Result<(), VecEnvError> {
+        self.dones.fill(false);
+        Ok(self.env.reset()?)
+    }
+
+    fn episode_lengths(&self) -> Result<&[u32], VecEnvError> {
+        Ok(self.env.episode_length())
+    }
+
+    fn set_episode_lengths(&mut self, lengths: &[u32]) -> Result<(), VecEnvError> {
+        Ok(self.env.set_episode_length(lengths)?)
     }
 
     fn randomize_episode_lengths(&mut self, seed: u64) -> Result<(), VecEnvError> {

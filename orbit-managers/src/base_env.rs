@@ -378,6 +378,9 @@ impl ManagerBasedEnv {
         }
         self.common_step_counter += 1;
         if let Some(instability) = orbit_core::physics::check_state(self.scene.backend.as_ref()) {
+            let backend = self.scene.backend.as_ref();
+            let state = orbit_core::physics::describe_env_state(backend, instability.env);
+            tracing::error!("{state}");
             return Err(EnvError::Unstable {
                 step: self.common_step_counter,
                 substeps: self.cfg.decimation,
@@ -409,5 +412,29 @@ impl ManagerBasedEnv {
     pub(crate) fn compute_observations(&mut self) {
         let view = view!(self);
         self.observations.compute(&view, &mut self.noise_rngs);
+    }
+
+    /// Every observation group's values of the listed envs as their episodes leave them,
+    /// into their rows of `out` (a buffer per group, in group order; see
+    /// [`ObservationManager::compute_final`]).
+    pub(crate) fn compute_final_observations(&mut self, env_ids: &[usize], out: &mut [Vec<f32>]) {
+        let view = view!(self);
+        self.observations.compute_final(&view, env_ids, out);
+    }
+
+    /// The index of observation group `name` and its width.
+    pub(crate) fn observation_group(&self, name: &str) -> Option<(usize, usize)> {
+        self.observations
+            .groups
+            .iter()
+            .position(|g| g.name == name)
+            .map(|i| (i, self.observations.groups[i].dim))
+    }
+
+    /// A zeroed buffer per observation group, `num_envs × dim` each.
+    pub(crate) fn observation_buffers(&self) -> Vec<Vec<f32>> {
+        let n = self.num_envs();
+        let groups = &self.observations.groups;
+        groups.iter().map(|g| vec![0.0; n * g.dim]).collect()
     }
 }

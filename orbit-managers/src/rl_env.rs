@@ -50,6 +50,8 @@ pub struct ManagerBasedRlEnv {
     reset_ids: Vec<usize>,
     extras: Extras,
     observer: Option<Box<dyn StepObserver>>,
+    /// Each group's last observations of the episodes that ended, when kept.
+    final_obs: Option<Vec<Vec<f32>>>,
 }
 
 /// The result of a step: views into the env's buffers.
@@ -112,6 +114,7 @@ impl ManagerBasedRlEnv {
             reset_ids: Vec::with_capacity(n),
             extras: Extras::default(),
             observer: None,
+            final_obs: None,
         };
         env.base.apply_startup_events()?;
         Ok(env)
@@ -217,6 +220,24 @@ impl ManagerBasedRlEnv {
         Ok(())
     }
 
+    /// Keeps, from the next step on, the last observations of each episode that ends (see
+    /// [`Self::final_observation`]), or stops keeping them. Off by default: it costs an
+    /// observation pass on every step in which an episode ends.
+    pub fn keep_final_observations(&mut self, keep: bool) {
+        self.final_obs = keep.then(|| self.base.observation_buffers());
+    }
+
+    /// The observation group `name` as the episodes that ended in the last step left it,
+    /// before their reset (what [`Self::observation`] returns for them is their new episode's
+    /// first): `(values num_envs × dim, dim)`, where only the rows of envs that were
+    /// terminated or timed out in the last step are that step's. The terms' clip and scale
+    /// apply, their noise does not. `None` unless [`Self::keep_final_observations`] is on or
+    /// for an unknown group.
+    pub fn final_observation(&self, name: &str) -> Option<(&[f32], usize)> {
+        let (group, dim) = self.base.observation_group(name)?;
+        Some((self.final_obs.as_ref()?[group].as_slice(), dim))
+    }
+
     /// Advances every env by one env step (see the module docs for the order).
     pub fn step(&mut self, action: &[f32]) -> Result<StepResult<'_>, EnvError> {
         let mut clock = Instant::now();
@@ -241,6 +262,9 @@ impl ManagerBasedRlEnv {
             .extend((0..terminated.len()).filter(|&e| terminated[e] || time_outs[e]));
         if !self.reset_ids.is_empty() {
             let ids = std::mem::take(&mut self.reset_ids);
+            if let Some(out) = &mut self.final_obs {
+                self.base.compute_final_observations(&ids, out);
+            }
             let result = self.reset_idx(&ids);
             self.reset_ids = ids;
             result?;

@@ -56,6 +56,8 @@ pub struct BlackBoxEnv {
     segments: u32,
     num_obs: usize,
     obs: Vec<f32>,
+    /// The contexts the last finished episodes ended in, when kept.
+    final_obs: Option<Vec<f32>>,
     q: Vec<f32>,
     qd: Vec<f32>,
     /// Conditioning state for the next plan (the last executed desired sample).
@@ -269,6 +271,7 @@ impl BlackBoxEnv {
             segments,
             num_obs,
             obs: vec![0.0; n * num_obs],
+            final_obs: None,
             q: vec![0.0; n * dof],
             qd: vec![0.0; n * dof],
             q_cond: vec![0.0; n * dof],
@@ -347,7 +350,14 @@ impl BlackBoxEnv {
     fn update_context(&mut self) {
         let (obs, width) = self.env.observation("policy").expect("checked in new");
         let progress = self.steps_done as f32 / self.env.max_episode_length() as f32;
-        for (e, out) in self.obs.chunks_exact_mut(self.num_obs).enumerate() {
+        let mut out = std::mem::take(&mut self.obs);
+        self.write_contexts(obs, width, progress, &mut out);
+        self.obs = out;
+    }
+
+    /// Each env's context from its `width`-wide row of `obs`, with `progress` when replanning.
+    fn write_contexts(&self, obs: &[f32], width: usize, progress: f32, out: &mut [f32]) {
+        for (e, out) in out.chunks_exact_mut(self.num_obs).enumerate() {
             let row = &obs[e * width..(e + 1) * width];
             for (o, &i) in out.iter_mut().zip(&self.context) {
                 *o = row[i];
@@ -416,6 +426,19 @@ impl VecEnv for BlackBoxEnv {
         &self.obs
     }
 
+    fn keep_final_observations(&mut self, keep: bool) {
+        self.env.keep_final_observations(keep);
+        self.final_obs = keep.then(|| vec![0.0; self.obs.len()]);
+    }
+
+    fn final_observations(&self) -> Option<&[f32]> {
+        self.final_obs.as_deref()
+    }
+
+    fn final_critic_observations(&self) -> Option<&[f32]> {
+        self.final_obs.as_deref()
+    }
+
     /// Runs one segment (the whole episode without replanning) of every env's trajectory.
     fn step(&mut self, params: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError> {
         let (n, dof) = (self.env.num_envs(), self.joints.len());
@@ -477,6 +500,11 @@ impl VecEnv for BlackBoxEnv {
             }
             if episode_end {
                 self.log.clone_from(&r.extras.log);
+                if let Some(mut out) = self.final_obs.take() {
+                    let (obs, width) = self.env.final_observation("policy").expect("kept");
+                    self.write_contexts(obs, width, 1.0, &mut out);
+                    self.final_obs = Some(out);
+                }
             }
         }
         // The next plan starts from the last executed desired sample.
@@ -499,6 +527,7 @@ impl VecEnv for BlackBoxEnv {
         Ok(VecEnvStep {
             rewards: &self.rewards,
             dones: &self.dones,
+            terminated: &self.dones,
             time_outs: &self.time_outs,
             log: if last_segment {
                 &self.log
@@ -507,6 +536,15 @@ impl VecEnv for BlackBoxEnv {
             },
             interactions: length as u32,
         })
+    }
+
+    fn reset(&mut self) -> Result<(), VecEnvError> {
+        self.env.reset()?;
+        self.plans = 0;
+        self.steps_done = 0;
+        self.dones.fill(false);
+        self.update_context();
+        Ok(())
     }
 
     fn randomize_episode_lengths(&mut self, _seed: u64) -> Result<(), VecEnvError> {

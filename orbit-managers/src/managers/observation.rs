@@ -144,12 +144,60 @@ impl ObservationManager {
             }
         }
     }
+
+    /// Writes each group's observations of the listed envs as they stand now, before a reset,
+    /// into their rows of `out[group]` (`num_envs × dim` each): terms, clip and scale,
+    /// histories shifted by the current value, but no noise. Histories and noise streams are
+    /// left alone, so the next [`Self::compute`] is unchanged.
+    pub(crate) fn compute_final(
+        &mut self,
+        env: &EnvView<'_>,
+        env_ids: &[usize],
+        out: &mut [Vec<f32>],
+    ) {
+        before_concurrent_terms(env);
+        self.groups.par_iter_mut().for_each(|g| {
+            g.terms
+                .par_iter_mut()
+                .for_each(|t| t.term.compute(env, &mut t.buf));
+        });
+        for (g, out) in self.groups.iter().zip(out) {
+            for &e in env_ids {
+                let row = &mut out[e * g.dim..(e + 1) * g.dim];
+                let mut column = 0;
+                for t in &g.terms {
+                    column += t.write_final(e, &mut row[column..]);
+                }
+            }
+        }
+    }
 }
 
 impl ObsTerm {
     /// Noise, clip and scale, as [`corrupt`] takes them.
     fn corruption(&self) -> Corruption {
         (self.noise, self.clip, self.scale)
+    }
+
+    /// Writes env `e`'s value as [`ObservationManager::compute_final`] takes it (clip and
+    /// scale, no noise; a history shifted by it, or filled with it after a reset) at the
+    /// start of `row`; returns the columns written.
+    fn write_final(&self, e: usize, row: &mut [f32]) -> usize {
+        let (d, width) = (self.term.dim(), self.out_dim());
+        let value = &self.buf[e * d..(e + 1) * d];
+        let slots = if self.history == 0 || self.fresh[e] {
+            self.history.max(1)
+        } else {
+            row[..width - d].copy_from_slice(&self.hist[e * width + d..(e + 1) * width]);
+            1
+        };
+        let first = width - slots * d;
+        for slot in row[first..width].chunks_exact_mut(d.max(1)).take(slots) {
+            for (v, &x) in slot.iter_mut().zip(value) {
+                *v = clip_and_scale(x, self.clip, self.scale);
+            }
+        }
+        width
     }
 
     /// Corrupts this term's fresh values, shifts them into its history and writes the history
@@ -202,13 +250,14 @@ fn corrupt((noise, clip, scale): Corruption, rng: &mut EnvRng, row: &mut [f32]) 
             Some(NoiseCfg::Gaussian { mean, std }) => mean + std * rng.normal(),
             None => 0.0,
         };
-        if let Some((lo, hi)) = clip {
-            *v = v.clamp(lo, hi);
-        }
-        if let Some(s) = scale {
-            *v *= s;
-        }
+        *v = clip_and_scale(*v, clip, scale);
     }
+}
+
+/// A term's clip, then its scale.
+fn clip_and_scale(v: f32, clip: Option<(f32, f32)>, scale: Option<f32>) -> f32 {
+    let v = clip.map_or(v, |(lo, hi)| v.clamp(lo, hi));
+    scale.map_or(v, |s| v * s)
 }
 
 impl Manager for ObservationManager {
