@@ -159,3 +159,11 @@ def test_skrl_wrapper_gives_column_tensors():
     assert torch.equal(env.state(), obs), "cart-pole's critic sees the policy's observations"
     again, _ = env.reset()
     assert torch.equal(again, obs), "the envs reset themselves: reset() after the first is a no-op"
+
+
+def test_observations_reach_torch_without_a_copy(env):
+    obs, _ = env.reset()
+    tensor = torch.from_dlpack(obs)
+    assert tensor.dtype == torch.float32 and tuple(tensor.shape) == obs.shape
+    obs[0, 0] = 123.0
+    assert tensor[0, 0].item() == 123.0, "the tensor shares the array's memory"
