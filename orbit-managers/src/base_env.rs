@@ -424,11 +424,10 @@ impl ManagerBasedEnv {
 
     /// The index of observation group `name` and its width.
     pub(crate) fn observation_group(&self, name: &str) -> Option<(usize, usize)> {
-        self.observations
-            .groups
-            .iter()
-            .position(|g| g.name == name)
-            .map(|i| (i, self.observations.groups[i].dim))
+        let mut groups = self.observations.groups.iter().enumerate();
+        groups
+            .find(|(_, g)| g.name == name)
+            .map(|(i, g)| (i, g.dim))
     }
 
     /// A zeroed buffer per observation group, `num_envs × dim` each.

@@ -70,54 +70,27 @@ pub fn check_state(backend: &dyn PhysicsBackend) -> Option<Instability> {
         if !art.fixed_base {
             // A floating base's root state is not a joint state: scan the links' poses and
             // velocities (the root's and, following it, every other link's).
-            let links = art.link_names.len();
-            let vec3s = [
-                (view.link_pos, "position", MAX_OBJECT_POSITION),
-                (
-                    view.link_lin_vel,
-                    "linear velocity",
-                    MAX_OBJECT_LINEAR_VELOCITY,
-                ),
-                (
-                    view.link_ang_vel,
-                    "angular velocity",
-                    MAX_OBJECT_ANGULAR_VELOCITY,
-                ),
-            ];
-            for (values, what, limit) in vec3s {
-                let flat: &[f32] = bytemuck::cast_slice::<Vec3, f32>(values);
-                let found = scan(flat, 3 * links, limit, num_envs, |column| {
-                    let link = &art.link_names[column / 3];
-                    let axis = ["x", "y", "z"][column % 3];
-                    format!(
-                        "{what} ({axis}) of link `{link}` of articulation `{}`",
-                        art.name
-                    )
-                });
-                if found.is_some() {
-                    return found;
-                }
+            let states = [view.link_pos, view.link_lin_vel, view.link_ang_vel];
+            let found = scan_bodies(states, art.link_names.len(), num_envs, |what, l, axis| {
+                let link = &art.link_names[l];
+                format!(
+                    "{what} ({axis}) of link `{link}` of articulation `{}`",
+                    art.name
+                )
+            });
+            if found.is_some() {
+                return found;
             }
         }
     }
     for (o, name) in layout.rigid_objects.iter().enumerate() {
         let view = backend.rigid_object(o);
-        for (values, what, limit) in [
-            (view.pos, "position", MAX_OBJECT_POSITION),
-            (view.lin_vel, "linear velocity", MAX_OBJECT_LINEAR_VELOCITY),
-            (
-                view.ang_vel,
-                "angular velocity",
-                MAX_OBJECT_ANGULAR_VELOCITY,
-            ),
-        ] {
-            let flat: &[f32] = bytemuck::cast_slice::<Vec3, f32>(values);
-            let found = scan(flat, 3, limit, num_envs, |column| {
-                format!("{what} ({}) of object `{name}`", ["x", "y", "z"][column])
-            });
-            if found.is_some() {
-                return found;
-            }
+        let states = [view.pos, view.lin_vel, view.ang_vel];
+        let found = scan_bodies(states, 1, num_envs, |what, _, axis| {
+            format!("{what} ({axis}) of object `{name}`")
+        });
+        if found.is_some() {
+            return found;
         }
     }
     None
@@ -159,6 +132,32 @@ pub fn describe_env_state(backend: &dyn PhysicsBackend, e: usize) -> String {
         }
     }
     out
+}
+
+/// The first out-of-range position, linear or angular velocity (`[pos, lin_vel, ang_vel]`,
+/// each `num_envs × bodies`) of bodies held to the free-object limits, named by
+/// `describe(quantity, body, axis)`.
+fn scan_bodies(
+    states: [&[Vec3]; 3],
+    bodies: usize,
+    num_envs: usize,
+    describe: impl Fn(&str, usize, &str) -> String,
+) -> Option<Instability> {
+    let limits = [
+        ("position", MAX_OBJECT_POSITION),
+        ("linear velocity", MAX_OBJECT_LINEAR_VELOCITY),
+        ("angular velocity", MAX_OBJECT_ANGULAR_VELOCITY),
+    ];
+    for (values, (what, limit)) in states.into_iter().zip(limits) {
+        let flat: &[f32] = bytemuck::cast_slice::<Vec3, f32>(values);
+        let found = scan(flat, 3 * bodies, limit, num_envs, |column| {
+            describe(what, column / 3, ["x", "y", "z"][column % 3])
+        });
+        if found.is_some() {
+            return found;
+        }
+    }
+    None
 }
 
 /// The first value of `values` (`num_envs` rows of `dim`) beyond `limit`, as an

@@ -99,13 +99,18 @@ impl ObservationManager {
         Ok(Self { groups })
     }
 
-    pub(crate) fn compute(&mut self, env: &EnvView<'_>, noise: &mut EnvRngs) {
+    /// Every term's fresh values into its buffer, the terms running concurrently.
+    fn compute_terms(&mut self, env: &EnvView<'_>) {
         before_concurrent_terms(env);
         self.groups.par_iter_mut().for_each(|g| {
             g.terms
                 .par_iter_mut()
                 .for_each(|t| t.term.compute(env, &mut t.buf));
         });
+    }
+
+    pub(crate) fn compute(&mut self, env: &EnvView<'_>, noise: &mut EnvRngs) {
+        self.compute_terms(env);
         // Noise draws follow term order within each env's stream: the terms go in order.
         let streams = noise.streams_mut();
         for g in &mut self.groups {
@@ -155,12 +160,7 @@ impl ObservationManager {
         env_ids: &[usize],
         out: &mut [Vec<f32>],
     ) {
-        before_concurrent_terms(env);
-        self.groups.par_iter_mut().for_each(|g| {
-            g.terms
-                .par_iter_mut()
-                .for_each(|t| t.term.compute(env, &mut t.buf));
-        });
+        self.compute_terms(env);
         for (g, out) in self.groups.iter().zip(out) {
             for &e in env_ids {
                 let row = &mut out[e * g.dim..(e + 1) * g.dim];

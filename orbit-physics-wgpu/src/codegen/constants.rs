@@ -41,7 +41,8 @@ impl Gen<'_> {
         // With a floating root, the kernel works in a frame at the first root's centre of
         // mass (`load_state`): spatial quantities at the env origin would lose f32 digits to
         // cancellation once a robot has walked tens of metres from it.
-        c(self, "SHIFTED", s.free_roots().next().is_some().to_string());
+        let shifted = self.shifted();
+        c(self, "SHIFTED", shifted.to_string());
         c(self, "REPUBLISH", f(layout::REPUBLISH));
         let contact = &sim.contact;
         // MuJoCo's rows (`normal_row` in step.wgsl); the soft step's as its target and

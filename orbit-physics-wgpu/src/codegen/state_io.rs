@@ -4,23 +4,21 @@
 use super::{Gen, v3};
 
 impl Gen<'_> {
-    /// ` - shift` where the kernel's frame is shifted (a floating root), else nothing: an
-    /// env-frame position into the kernel's frame.
-    pub(super) fn minus_shift(&self) -> &'static str {
-        if self.scene.free_roots().next().is_some() {
-            " - shift"
-        } else {
-            ""
-        }
+    /// Whether the kernel works in a frame at the first floating root (one exists) rather
+    /// than at the env origin.
+    pub(super) fn shifted(&self) -> bool {
+        self.scene.free_roots().next().is_some()
     }
 
-    /// ` + shift` where the kernel's frame is shifted: a kernel-frame position into the env's.
+    /// ` - shift` in a shifted kernel, else nothing: an env-frame position into the kernel's
+    /// frame.
+    pub(super) fn minus_shift(&self) -> &'static str {
+        if self.shifted() { " - shift" } else { "" }
+    }
+
+    /// ` + shift` in a shifted kernel: a kernel-frame position into the env's.
     fn plus_shift(&self) -> &'static str {
-        if self.scene.free_roots().next().is_some() {
-            " + shift"
-        } else {
-            ""
-        }
+        if self.shifted() { " + shift" } else { "" }
     }
 
     /// `(articulation dofs, links, local link index)` of every link, for buffer addresses.
