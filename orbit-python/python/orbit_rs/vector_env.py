@@ -100,10 +100,10 @@ class OrbitVectorEnv(VectorEnv):
             infos["_final_info"] = done.copy()
             infos["final_info"] = {}
             if self.keep_final_obs:
+                rows = list(self.native.final_observations(done))
                 final = np.empty(self.num_envs, dtype=object)
-                rows = self.native.final_observations(done)
-                for i, row in zip(np.flatnonzero(done), rows):
-                    final[i] = row
+                # One row view per finished env, placed without a Python loop.
+                final[done] = np.fromiter(rows, dtype=object, count=len(rows))
                 infos["final_obs"] = final
         return obs, rewards, terminated, truncated, infos
 
