@@ -1,9 +1,7 @@
 """Env-steps/s of a task stepped from Python against the same env stepped from Rust.
 
-Both sides build the task with the same seed, backend and env count, reset it, and time
-``--steps`` steps with zero actions; the Rust side is the ``zero_agent`` example (release
-build), which times only its ``env.step`` calls. The Python side times three loops, each on
-an env built afresh, so that every loop covers the same steps of the same episodes:
+Python builds the task with the given seed, backend and env count, resets it, and times
+``--steps`` steps with zero actions in one of three loops:
 
 - ``native``: ``NativeEnv.step`` alone (the call into Rust and the new reward and flag
   arrays, no observations);
@@ -11,7 +9,13 @@ an env built afresh, so that every loop covers the same steps of the same episod
 - ``gymnasium``: ``OrbitVectorEnv.step``, which also builds the infos (final observations
   of the finished envs, the episode log).
 
-Runs alternate (Rust, then Python) ``--repeats`` times; the table gives the median of each.
+Each loop runs on an env built afresh, so that all cover the same steps of the same
+episodes. Its overhead is its wall time over the time the same steps spent inside the Rust
+env (``NativeEnv.step_seconds``), minus one: Python's share, measured in one process on
+the same steps. For reference, the ``zero_agent`` example (a release build) steps the same
+task in a Rust program; its rate varies from process to process by more than Python's
+share, so it is shown, not subtracted. Runs alternate (Rust, then the three Python loops)
+``--repeats`` times; the table gives medians.
 
 ```sh
 cargo build --release --example zero_agent
@@ -32,6 +36,8 @@ import time
 import numpy as np
 
 import orbit_rs
+
+LOOPS = ("native", "native + obs", "gymnasium")
 
 
 def rust_steps_per_s(args: argparse.Namespace) -> float:
@@ -56,17 +62,9 @@ def rust_steps_per_s(args: argparse.Namespace) -> float:
     return float(found.group(1))
 
 
-def timed(step, steps: int, num_envs: int) -> float:
-    """Env-steps/s of ``steps`` calls of ``step``."""
-    start = time.perf_counter()
-    for _ in range(steps):
-        step()
-    return steps * num_envs / (time.perf_counter() - start)
-
-
-def python_steps_per_s(args: argparse.Namespace, loop: str) -> float:
-    """Builds the env from Python, as the Rust side does, and times one loop over the same
-    steps of the episodes."""
+def python_loop(args: argparse.Namespace, loop: str) -> tuple[float, float]:
+    """Builds the env from Python and times one loop: its env-steps/s and Python's share
+    (wall time over the time inside the Rust env, minus one)."""
     env = orbit_rs.make(
         args.task, num_envs=args.num_envs, backend=args.backend, seed=args.seed
     )
@@ -83,12 +81,14 @@ def python_steps_per_s(args: argparse.Namespace, loop: str) -> float:
         "native + obs": native_and_obs,
         "gymnasium": lambda: env.step(zeros),
     }[loop]
-    result = timed(step, args.steps, args.num_envs)
+    inside = native.step_seconds
+    start = time.perf_counter()
+    for _ in range(args.steps):
+        step()
+    wall = time.perf_counter() - start
+    inside = native.step_seconds - inside
     env.close()
-    return result
-
-
-LOOPS = ("native", "native + obs", "gymnasium")
+    return args.steps * args.num_envs / wall, wall / inside - 1.0
 
 
 def main() -> None:
@@ -103,23 +103,25 @@ def main() -> None:
     args = parser.parse_args()
 
     rust: list[float] = []
-    python: dict[str, list[float]] = {}
+    rates: dict[str, list[float]] = {loop: [] for loop in LOOPS}
+    shares: dict[str, list[float]] = {loop: [] for loop in LOOPS}
     for _ in range(args.repeats):
         rust.append(rust_steps_per_s(args))
         for loop in LOOPS:
-            python.setdefault(loop, []).append(python_steps_per_s(args, loop))
+            rate, share = python_loop(args, loop)
+            rates[loop].append(rate)
+            shares[loop].append(share)
 
-    reference = statistics.median(rust)
     print(
         f"{args.task}, {args.backend}, {args.num_envs} envs, {args.steps} steps with zero "
         f"actions, median of {args.repeats}"
     )
-    print(f"{'loop':<14} {'env-steps/s':>12} {'overhead':>9}")
-    print(f"{'rust':<14} {reference:>12.0f} {'':>9}")
-    for name, values in python.items():
-        median = statistics.median(values)
-        overhead = 100.0 * (reference / median - 1.0)
-        print(f"{name:<14} {median:>12.0f} {overhead:>8.1f}%")
+    print(f"{'loop':<14} {'env-steps/s':>12} {'Python share':>13}")
+    print(f"{'zero_agent':<14} {statistics.median(rust):>12.0f}")
+    for loop in LOOPS:
+        rate = statistics.median(rates[loop])
+        share = 100.0 * statistics.median(shares[loop])
+        print(f"{loop:<14} {rate:>12.0f} {share:>12.2f}%")
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use orbit_envs::{BoxedVecEnv, RunConfigs, VecEnv};
@@ -48,6 +49,8 @@ struct NativeEnv {
     configs: RunConfigs,
     overrides: Vec<String>,
     black_box_overrides: Vec<String>,
+    /// Wall time spent inside the env's steps, to tell Python's share of a step from Rust's.
+    stepping: Duration,
 }
 
 impl NativeEnv {
@@ -68,6 +71,7 @@ impl NativeEnv {
             configs,
             overrides,
             black_box_overrides,
+            stepping: Duration::ZERO,
         })
     }
 }
@@ -147,6 +151,13 @@ impl NativeEnv {
     #[getter]
     fn backend(&self) -> &str {
         &self.backend
+    }
+
+    /// Seconds spent inside the Rust env's steps since the env was built: a step's time as a
+    /// Rust program would see it, without the call from Python and the arrays returned.
+    #[getter]
+    fn step_seconds(&self) -> f64 {
+        self.stepping.as_secs_f64()
     }
 
     /// Whether one step is one movement primitive (a black-box task).
@@ -252,7 +263,9 @@ impl NativeEnv {
                 actions.shape()
             )));
         }
+        let start = Instant::now();
         let step = self.env.step(actions.as_slice()?).map_err(error)?;
+        self.stepping += start.elapsed();
         Ok((
             PyArray1::from_slice(py, step.rewards),
             PyArray1::from_slice(py, step.terminated),
