@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -42,6 +44,19 @@ def test_returned_data_is_new_on_every_call(env):
         for obs_j, info_j in calls[i + 1 :]:
             assert not data_shares_objects(obs_i, obs_j)
             assert not data_shares_objects(info_i, info_j)
+
+
+def test_step_seconds_counts_only_time_inside_the_steps(env):
+    # The time inside the Rust steps grows with each step and never exceeds the wall time
+    # around the calls (both clocks are monotonic; 1 ms allows for their different sources).
+    env.reset()
+    before = env.native.step_seconds
+    start = time.perf_counter()
+    for t in range(5):
+        env.step(actions_for(t, 16, 1))
+    wall = time.perf_counter() - start
+    inside = env.native.step_seconds - before
+    assert 0.0 < inside <= wall + 1e-3
 
 
 def test_finished_envs_restart_in_the_same_step():
