@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use orbit_core::config::Node;
-use orbit_core::physics::build_backend;
+use orbit_core::physics::{StateSnapshot, build_backend};
 use orbit_core::rng::{EnvRng, streams};
 
 use crate::cfg::{EnvCfg, EventMode};
@@ -176,6 +176,8 @@ pub struct ManagerBasedEnv {
     pub(crate) command_rngs: EnvRngs,
     noise_rngs: EnvRngs,
     interval_rngs: EnvRngs,
+    /// Every env's state before the current step, when `sim.keep_pre_step_state` asks.
+    pre_step: Option<StateSnapshot>,
 }
 
 impl ManagerBasedEnv {
@@ -232,6 +234,7 @@ impl ManagerBasedEnv {
             command_rngs: EnvRngs::new(seed, n, streams::COMMAND),
             noise_rngs: EnvRngs::new(seed, n, streams::NOISE),
             interval_rngs: EnvRngs::new(seed, n, streams::INTERVAL),
+            pre_step: cfg.sim.keep_pre_step_state.then(StateSnapshot::default),
             cfg,
         })
     }
@@ -358,6 +361,9 @@ impl ManagerBasedEnv {
     /// First half of a step: actions, the decimation loop (one fused call when the actions
     /// allow it), counters.
     pub(crate) fn simulate(&mut self, action: &[f32], clock: &mut Instant) -> Result<(), EnvError> {
+        if let Some(snapshot) = &mut self.pre_step {
+            snapshot.capture(self.scene.backend.as_ref());
+        }
         self.actions.process(&self.scene, action)?;
         lap(&mut self.timings.actions, clock);
         if self.actions.substep_invariant() {
@@ -379,8 +385,22 @@ impl ManagerBasedEnv {
         self.common_step_counter += 1;
         if let Some(instability) = orbit_core::physics::check_state(self.scene.backend.as_ref()) {
             let backend = self.scene.backend.as_ref();
-            let state = orbit_core::physics::describe_env_state(backend, instability.env);
-            tracing::error!("{state}");
+            let e = instability.env;
+            tracing::error!("{}", orbit_core::physics::describe_env_state(backend, e));
+            if let Some(snapshot) = &self.pre_step {
+                let d = self.actions.dim();
+                let failed = crate::FailedStep {
+                    step: self.common_step_counter,
+                    env: e,
+                    action: action[e * d..(e + 1) * d].to_vec(),
+                    state: snapshot.env_state(backend, e),
+                };
+                tracing::error!(
+                    "env {e} before the failing step (replay it with the `replay_step` \
+                     example): {}",
+                    failed.to_ron()
+                );
+            }
             return Err(EnvError::Unstable {
                 step: self.common_step_counter,
                 substeps: self.cfg.decimation,

@@ -47,7 +47,8 @@ pub enum EnvError {
         "the physics became unstable in env step {step} (counted from the env's start; \
          {substeps} physics steps of {dt} s each): {instability}. Lower `sim.dt`, raise \
          `sim.solver_iterations` (now {solver_iterations}; 0 is the backend's default), or \
-         check the scene's masses, stiffnesses and gains"
+         check the scene's masses, stiffnesses and gains. With `sim.keep_pre_step_state=true` \
+         the log gives the state the step began from, for the `replay_step` example"
     )]
     Unstable {
         /// Env steps since the env was built, the failing one included.

@@ -12,6 +12,7 @@ mod base_env;
 pub mod cfg;
 pub mod diff_ik;
 mod error;
+mod failed_step;
 pub mod managers;
 pub mod mdp;
 mod rl_env;
@@ -21,6 +22,7 @@ pub mod term;
 
 pub use base_env::{EnvRngs, EnvView, ManagerBasedEnv, StepTimings};
 pub use error::EnvError;
+pub use failed_step::FailedStep;
 pub use rl_env::{Extras, ManagerBasedRlEnv, StepObserver, StepResult};
 pub use scene::Scene;
 pub use task::{

@@ -28,6 +28,11 @@ fn floating_root_writes() {
 }
 
 #[test]
+fn snapshot_replays_a_step() {
+    orbit_conformance::snapshot_replays_a_step(BACKEND_NAME);
+}
+
+#[test]
 fn ant_tracks_mujoco_rollout() {
     // Rapier moves positions with neither the new nor the old velocity alone (see `free_fall`):
     // in a fall of 0.29 s at 2 ms steps the two Euler variants part by g t h / 2 = 2.8 mm.

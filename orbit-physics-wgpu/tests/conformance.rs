@@ -167,6 +167,13 @@ fn floating_root_writes() {
 }
 
 #[test]
+fn snapshot_replays_a_step() {
+    if gpu_available() {
+        orbit_conformance::snapshot_replays_a_step(BACKEND_NAME);
+    }
+}
+
+#[test]
 fn ant_standing_height() {
     if gpu_available() {
         orbit_conformance::ant_standing_height(BACKEND_NAME);

@@ -7,6 +7,7 @@ mod health;
 mod layout;
 mod memory;
 mod registry;
+mod snapshot;
 
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
@@ -16,6 +17,7 @@ pub use health::*;
 pub use layout::*;
 pub use memory::*;
 pub use registry::*;
+pub use snapshot::*;
 
 use crate::scene::RootState;
 
@@ -43,6 +45,11 @@ pub struct SimCfg {
     /// Contact softness in MuJoCo's terms (the wgpu backend; rapier keeps its own).
     #[serde(default)]
     pub contact: ContactCfg,
+    /// Keep every env's state from before each step (a copy of the joint states, floating
+    /// roots and objects per step), so that a step that breaks the physics is reported with
+    /// the state it began from, ready to replay (the `replay_step` example).
+    #[serde(default)]
+    pub keep_pre_step_state: bool,
 }
 
 fn default_dt() -> f32 {
@@ -64,6 +71,7 @@ impl Default for SimCfg {
             backend: default_backend(),
             num_threads: 0,
             contact: ContactCfg::default(),
+            keep_pre_step_state: false,
         }
     }
 }
