@@ -56,27 +56,19 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     })?;
     let failed = FailedStep::from_ron(&text[start..])
         .map_err(|e| format!("{}: {e}", args.failed.display()))?;
-    let user: Vec<String> = args
-        .overrides
-        .iter()
-        .map(|o| orbit::env_override(o))
-        .collect();
-    let mut overrides = orbit::run_overrides(Some(1), None, args.backend.as_deref(), &user);
-    let configs = orbit::RunConfigs::resolve(
-        args.task.as_deref(),
-        orbit::envs::DEFAULT_STEP_TASK,
-        args.task_config.as_deref(),
-        None,
-        None,
-    )?;
-    orbit::choose_run_backend(&configs.env, &mut overrides)?;
-    let mut env = orbit::managers::make_from_file(&configs.env, &overrides)?;
-    env.reset()?;
+    let flags = orbit::EnvArgs {
+        task_config: args.task_config.clone(),
+        num_envs: Some(1),
+        seed: None,
+        backend: args.backend.clone(),
+    };
+    let (mut env, name) =
+        orbit::agent::make_step_env(args.task.as_deref(), &flags, &args.overrides)?;
     if failed.action.len() != env.action_dim() {
         return Err(format!(
             "the failed step's action has {} values; {} takes {}",
             failed.action.len(),
-            configs.name,
+            name,
             env.action_dim()
         )
         .into());
@@ -86,7 +78,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         "replaying env {} of step {} of {} on {}",
         failed.env,
         failed.step,
-        configs.name,
+        name,
         env.scene().backend.name()
     );
     for step in 1..=args.steps {

@@ -60,6 +60,29 @@ impl Recording {
     }
 }
 
+/// Builds and resets the step-based env of `task` (default: box pushing), or of the env file
+/// `env.task_config`, with `env`'s flags and `overrides` (`key.path=value`, with or without
+/// `env.`), on the backend chosen for this machine; returns it with the task's name.
+pub fn make_step_env(
+    task: Option<&str>,
+    env: &crate::EnvArgs,
+    overrides: &[String],
+) -> Result<(crate::managers::ManagerBasedRlEnv, String), Box<dyn std::error::Error>> {
+    let user: Vec<String> = overrides.iter().map(|o| crate::env_override(o)).collect();
+    let mut overrides = crate::run_overrides(env.num_envs, env.seed, env.backend.as_deref(), &user);
+    let configs = crate::RunConfigs::resolve(
+        task,
+        crate::envs::DEFAULT_STEP_TASK,
+        env.task_config.as_deref(),
+        None,
+        None,
+    )?;
+    crate::choose_run_backend(&configs.env, &mut overrides)?;
+    let mut made = crate::managers::make_from_file(&configs.env, &overrides)?;
+    made.reset()?;
+    Ok((made, configs.name))
+}
+
 /// Runs the task with uniform random actions in `[-1, 1]` (or zeros) and prints episode logs
 /// and throughput.
 pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error>> {
@@ -68,23 +91,7 @@ pub fn run(args: &AgentArgs, zero: bool) -> Result<(), Box<dyn std::error::Error
         return Err("`--steps` must be at least 1: there is nothing to report of no steps".into());
     }
     let e = &args.env;
-    let user: Vec<String> = args
-        .overrides
-        .iter()
-        .map(|o| crate::env_override(o))
-        .collect();
-    let mut overrides = crate::run_overrides(e.num_envs, e.seed, e.backend.as_deref(), &user);
-    let configs = crate::RunConfigs::resolve(
-        args.task.as_deref(),
-        crate::envs::DEFAULT_STEP_TASK,
-        e.task_config.as_deref(),
-        None,
-        None,
-    )?;
-    crate::choose_run_backend(&configs.env, &mut overrides)?;
-    let mut env = crate::managers::make_from_file(&configs.env, &overrides)?;
-    let name = configs.name;
-    env.reset()?;
+    let (mut env, name) = make_step_env(args.task.as_deref(), e, &args.overrides)?;
     let (n, d) = (env.num_envs(), env.action_dim());
     let mut rng = EnvRng::new(e.seed.unwrap_or(0), 0, streams::POLICY);
     let mut action = vec![0.0f32; n * d];

@@ -46,17 +46,17 @@ struct BodyStates {
 }
 
 impl BodyStates {
-    /// Copies body `body` of every env from arrays of `stride` bodies per env.
-    fn copy(&mut self, stride: usize, body: usize, states: [&[Vec3]; 3], quat: &[Quat]) {
+    /// Copies each env's first body from arrays of `stride` bodies per env.
+    fn copy(&mut self, stride: usize, states: [&[Vec3]; 3], quat: &[Quat]) {
         let pick = |values: &[Vec3], out: &mut Vec<Vec3>| {
             out.clear();
-            out.extend(values.iter().skip(body).step_by(stride));
+            out.extend(values.iter().step_by(stride));
         };
         pick(states[0], &mut self.pos);
         pick(states[1], &mut self.lin_vel);
         pick(states[2], &mut self.ang_vel);
         self.quat.clear();
-        self.quat.extend(quat.iter().skip(body).step_by(stride));
+        self.quat.extend(quat.iter().step_by(stride));
     }
 
     fn state(&self, e: usize) -> RootStateCfg {
@@ -107,14 +107,14 @@ impl StateSnapshot {
             } else {
                 let bodies = [view.link_pos, view.link_lin_vel, view.link_ang_vel];
                 let root = states.root.get_or_insert_with(Default::default);
-                root.copy(view.num_links, 0, bodies, view.link_quat);
+                root.copy(view.num_links, bodies, view.link_quat);
             }
         }
         self.rigid_objects
             .resize_with(layout.rigid_objects.len(), Default::default);
         for (o, states) in self.rigid_objects.iter_mut().enumerate() {
             let view = backend.rigid_object(o);
-            states.copy(1, 0, [view.pos, view.lin_vel, view.ang_vel], view.quat);
+            states.copy(1, [view.pos, view.lin_vel, view.ang_vel], view.quat);
         }
     }
 
@@ -153,8 +153,8 @@ impl EnvState {
     /// Writes this state into env `e` of `backend`, whose scene must have the same entities
     /// and joints.
     pub fn write(&self, backend: &mut dyn PhysicsBackend, e: usize) -> Result<(), PhysicsError> {
-        let layout = backend.layout().clone();
         for (name, state) in &self.articulations {
+            let layout = backend.layout();
             let a = layout.articulation(name)?;
             let dofs = layout.articulations[a].num_dofs();
             if state.joint_pos.len() != dofs || state.joint_vel.len() != dofs {
@@ -171,7 +171,7 @@ impl EnvState {
             backend.write_joint_state(a, &[e], &state.joint_pos, &state.joint_vel)?;
         }
         for (name, state) in &self.rigid_objects {
-            let o = layout.rigid_object(name)?;
+            let o = backend.layout().rigid_object(name)?;
             backend.write_root_state(o, &[e], &[root_state(state)])?;
         }
         Ok(())
