@@ -25,19 +25,68 @@ pub(super) fn index_tensor(idx: &[u32], device: &Device) -> Tensor<1, Int> {
     Tensor::from_data(TensorData::new(idx, [n]), device)
 }
 
-/// The sum of all of `x`'s values as a `[1]` tensor, reduced along one dimension. burn's
-/// whole-tensor `sum` (and `mean`) lets cubecl's autotune choose a kernel whose workgroups add
-/// their partial sums atomically (`sum_one_shot`), in an order that changes from run to run;
-/// it does choose it for the gradient norms' sums on an H100. A reduction along a dimension
-/// gives each output to one workgroup, so the same inputs give the same bits.
+/// The sum of all of `x`'s values as a `[1]` tensor, reduced along one dimension at a time.
+/// burn's whole-tensor `sum` (and `mean`) lets cubecl's autotune choose a kernel whose
+/// workgroups add their partial sums atomically (`sum_one_shot`), in an order that changes from
+/// run to run; it does choose it for the gradient norms' sums on an H100. A reduction along a
+/// dimension gives each output to one workgroup, so the same inputs give the same bits. The
+/// fixed kernels give each output to one thread, so the values are summed in stages of at
+/// most [`MAX_STAGE`] (`[b, n / b]` along its `b` rows): one stage over a minibatch's losses
+/// would be one thread's loop over tens of thousands of values.
 pub(super) fn sum_all<const D: usize>(x: Tensor<D>) -> Tensor<1> {
-    let n = x.shape().num_elements();
-    x.reshape([n]).sum_dim(0)
+    let mut n = x.shape().num_elements();
+    let mut x = x.reshape([n]);
+    loop {
+        let b = stage_length(n);
+        if b == n {
+            return x.sum_dim(0);
+        }
+        n /= b;
+        x = x.reshape([b, n]).sum_dim(0).reshape([n]);
+    }
 }
 
-/// The mean of `x`'s values as a `[1]` tensor, reduced as in [`sum_all`].
+/// The mean of `x`'s values as a `[1]` tensor, summed as in [`sum_all`].
 pub(super) fn mean_all(x: Tensor<1>) -> Tensor<1> {
-    x.mean_dim(0)
+    let n = x.dims()[0];
+    sum_all(x).div_scalar(n as f32)
+}
+
+/// Longest run of values one thread adds in a stage of [`sum_all`].
+const MAX_STAGE: usize = 64;
+
+/// How many values each output of [`sum_all`]'s next stage adds for `n` values: all of them
+/// when `n` is at most [`MAX_STAGE`] or has no divisor in `2..=MAX_STAGE` (a prime), otherwise
+/// the largest such divisor.
+fn stage_length(n: usize) -> usize {
+    if n <= MAX_STAGE {
+        return n;
+    }
+    (2..=MAX_STAGE)
+        .rev()
+        .find(|b| n.is_multiple_of(*b))
+        .unwrap_or(n)
+}
+
+/// `x` (`[1, k]`) repeated over `rows` rows. The gradient of a plain broadcast is one sum over
+/// all rows for each of the `k` columns, which the fixed kernels give to one thread each (a
+/// loop over a minibatch's tens of thousands of rows); spread as `[c, rows / c, k]` with `c`
+/// near `√rows`, burn's backward pass sums it in two short stages.
+pub(super) fn spread_rows(x: Tensor<2>, rows: usize) -> Tensor<2> {
+    let k = x.dims()[1];
+    let c = divisor_near_sqrt(rows);
+    x.reshape([1, 1, k])
+        .expand([c, rows / c, k])
+        .reshape([rows, k])
+}
+
+/// The divisor of `n` nearest below `√n` (1 for a prime `n`).
+fn divisor_near_sqrt(n: usize) -> usize {
+    let mut c = n.isqrt().max(1);
+    while !n.is_multiple_of(c) {
+        c -= 1;
+    }
+    c
 }
 
 /// A tensor's values, row-major.
@@ -45,4 +94,54 @@ pub(crate) fn values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
     t.into_data()
         .try_into_vec::<f32>()
         .expect("float tensors hold f32 values")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sum_stages_divide_and_stay_short() {
+        for n in 1..5_000 {
+            let b = stage_length(n);
+            assert_eq!(n % b, 0, "{b} does not divide {n}");
+            assert!(b <= MAX_STAGE || b == n, "{b} values a thread for {n}");
+        }
+        assert_eq!(stage_length(32_768), 64);
+        assert_eq!(stage_length(80_000), 64);
+        assert_eq!(stage_length(1_250), 50);
+        assert_eq!(stage_length(10_007), 10_007, "a prime");
+    }
+
+    /// Each row is `x`; the gradient of `Σ wᵢⱼ yᵢⱼ` is the column sums of `w`, exact here
+    /// because the weights are small integers.
+    #[test]
+    fn spread_rows_repeats_the_row_and_sums_its_gradient() {
+        let device = Device::flex().autodiff();
+        for rows in [1, 6, 7, 1_024, 1_000] {
+            let x = tensor2(vec![0.5, -2.0, 3.0], 1, 3, &device).require_grad();
+            let y = spread_rows(x.clone(), rows);
+            assert_eq!(y.dims(), [rows, 3]);
+            let got = values(y.clone());
+            assert!(got.chunks(3).all(|r| r == [0.5, -2.0, 3.0]), "{rows} rows");
+            let w: Vec<f32> = (0..rows * 3).map(|i| (i % 5) as f32).collect();
+            let column_sums: Vec<f32> = (0..3).map(|j| w.iter().skip(j).step_by(3).sum()).collect();
+            let grads = y.mul(tensor2(w, rows, 3, &device)).sum().backward();
+            assert_eq!(values(x.grad(&grads).unwrap()), column_sums, "{rows} rows");
+        }
+    }
+
+    /// Integers up to 2²⁴ are exact in `f32`, so every summation order gives the exact sum.
+    #[test]
+    fn sums_and_means_of_all_values_are_exact_for_integers() {
+        let device = Device::flex();
+        for n in [1, 7, 12, 1_000, 10_007, 2 * 10_007, 32_768, 80_000] {
+            let x: Vec<f32> = (0..n).map(|i| (i % 97) as f32).collect();
+            let exact: f64 = x.iter().map(|&v| f64::from(v)).sum();
+            let t = tensor2(x.clone(), 1, n, &device);
+            assert_eq!(values(sum_all(t))[0] as f64, exact, "sum of {n} values");
+            let mean = values(mean_all(tensor1(x, &device)))[0] as f64;
+            assert!((mean - exact / n as f64).abs() <= 1e-6 * (exact / n as f64).max(1.0));
+        }
+    }
 }

@@ -9,7 +9,7 @@ use burn::tensor::{Int, Tensor};
 
 use super::grad_clip::clip_gradients;
 use super::minibatch::Minibatch;
-use super::tensor::{index_tensor, mean_all, sum_all};
+use super::tensor::{index_tensor, mean_all, spread_rows, sum_all};
 use super::{MAX_ROLLOUT_ROWS, Ppo, tensor1, values};
 use crate::RlError;
 use crate::cfg::Schedule;
@@ -146,13 +146,18 @@ impl Ppo {
         let sigma = self.model.action_std().reshape([1, na]);
         let log_sigma_sum = sum_all(sigma.clone().log());
         // log N(a; μ, σ) summed over actions: −Σ (a−μ)²/(2σ²) − Σ ln σ − A/2·ln 2π.
+        // σ and Σ ln σ reach every row through `spread_rows`: their gradients are sums over
+        // the rows.
         let log_prob = (actions - mu.clone())
             .powi_scalar(2)
-            .div(sigma.clone().powi_scalar(2).mul_scalar(2.0))
+            .div(spread_rows(
+                sigma.clone().powi_scalar(2).mul_scalar(2.0),
+                rows,
+            ))
             .sum_dim(1)
             .reshape([rows])
             .neg()
-            .sub(log_sigma_sum.clone())
+            .sub(spread_rows(log_sigma_sum.clone().reshape([1, 1]), rows).reshape([rows]))
             .sub_scalar(na as f32 * 0.5 * (2.0 * PI).ln());
         // The entropy of a state-independent Gaussian is the same for every row.
         let entropy = log_sigma_sum.add_scalar(na as f32 * (0.5 + 0.5 * (2.0 * PI).ln()));
