@@ -59,13 +59,8 @@ const MAX_STAGE: usize = 64;
 /// when `n` is at most [`MAX_STAGE`] or has no divisor in `2..=MAX_STAGE` (a prime), otherwise
 /// the largest such divisor.
 fn stage_length(n: usize) -> usize {
-    if n <= MAX_STAGE {
-        return n;
-    }
-    (2..=MAX_STAGE)
-        .rev()
-        .find(|b| n.is_multiple_of(*b))
-        .unwrap_or(n)
+    let b = largest_divisor_up_to(n, MAX_STAGE);
+    if n <= MAX_STAGE || b == 1 { n } else { b }
 }
 
 /// `x` (`[1, k]`) repeated over `rows` rows. The gradient of a plain broadcast is one sum over
@@ -74,19 +69,15 @@ fn stage_length(n: usize) -> usize {
 /// near `√rows`, burn's backward pass sums it in two short stages.
 pub(super) fn spread_rows(x: Tensor<2>, rows: usize) -> Tensor<2> {
     let k = x.dims()[1];
-    let c = divisor_near_sqrt(rows);
+    let c = largest_divisor_up_to(rows, rows.isqrt());
     x.reshape([1, 1, k])
         .expand([c, rows / c, k])
         .reshape([rows, k])
 }
 
-/// The divisor of `n` nearest below `√n` (1 for a prime `n`).
-fn divisor_near_sqrt(n: usize) -> usize {
-    let mut c = n.isqrt().max(1);
-    while !n.is_multiple_of(c) {
-        c -= 1;
-    }
-    c
+/// The largest divisor of `n` that is at most `m` (1 when there is none larger).
+fn largest_divisor_up_to(n: usize, m: usize) -> usize {
+    (2..=m).rev().find(|d| n.is_multiple_of(*d)).unwrap_or(1)
 }
 
 /// A tensor's values, row-major.
@@ -111,6 +102,9 @@ mod tests {
         assert_eq!(stage_length(80_000), 64);
         assert_eq!(stage_length(1_250), 50);
         assert_eq!(stage_length(10_007), 10_007, "a prime");
+        assert_eq!(largest_divisor_up_to(32_768, 32_768usize.isqrt()), 128);
+        assert_eq!(largest_divisor_up_to(1_000, 1_000usize.isqrt()), 25);
+        assert_eq!(largest_divisor_up_to(7, 2), 1);
     }
 
     /// Each row is `x`; the gradient of `Σ wᵢⱼ yᵢⱼ` is the column sums of `w`, exact here
