@@ -8,6 +8,9 @@ use orbit_core::rng::EnvRng;
 
 use crate::cfg::{Activation, NoiseStdType, PolicyCfg};
 
+mod stacked;
+pub use stacked::StackedActorCritic;
+
 /// A multi-layer perceptron: `Linear, act, Linear, act, …, Linear` (no output activation).
 #[derive(Module, Debug)]
 pub struct Mlp {
@@ -70,22 +73,22 @@ impl Mlp {
         for (i, layer) in self.layers.iter().enumerate() {
             x = linear(layer, x);
             if i < last {
-                x = self.activate(x);
+                x = activate(self.activation, x);
             }
         }
         x
     }
+}
 
-    /// The configured activation, element-wise.
-    fn activate<const D: usize>(&self, x: Tensor<D>) -> Tensor<D> {
-        match self.activation {
-            Activation::Elu => elu(x, 1.0, 1.0),
-            Activation::Selu => elu(x, SELU_SCALE, SELU_SCALE * SELU_ALPHA),
-            Activation::Relu => activation::relu(x),
-            Activation::Lrelu => activation::leaky_relu(x, 0.01),
-            Activation::Tanh => activation::tanh(x),
-            Activation::Sigmoid => activation::sigmoid(x),
-        }
+/// The configured activation, element-wise.
+fn activate<const D: usize>(kind: Activation, x: Tensor<D>) -> Tensor<D> {
+    match kind {
+        Activation::Elu => elu(x, 1.0, 1.0),
+        Activation::Selu => elu(x, SELU_SCALE, SELU_SCALE * SELU_ALPHA),
+        Activation::Relu => activation::relu(x),
+        Activation::Lrelu => activation::leaky_relu(x, 0.01),
+        Activation::Tanh => activation::tanh(x),
+        Activation::Sigmoid => activation::sigmoid(x),
     }
 }
 
@@ -142,9 +145,17 @@ fn elu<const D: usize>(x: Tensor<D>, scale: f64, alpha: f64) -> Tensor<D> {
 }
 
 /// ELU as `scale·max(x, 0) + alpha·(e^min(x, 0) − 1)`: the GPU learner's form.
+/// Factors of 1 (ELU's) are left out: each operation costs a GPU learner host time.
 fn elu_by_clamps<const D: usize>(x: Tensor<D>, scale: f64, alpha: f64) -> Tensor<D> {
-    let positive = x.clone().clamp_min(0.0).mul_scalar(scale);
-    let negative = x.clamp_max(0.0).exp().sub_scalar(1.0).mul_scalar(alpha);
+    let scaled = |t: Tensor<D>, factor: f64| {
+        if factor == 1.0 {
+            t
+        } else {
+            t.mul_scalar(factor)
+        }
+    };
+    let positive = scaled(x.clone().clamp_min(0.0), scale);
+    let negative = scaled(x.clamp_max(0.0).exp().sub_scalar(1.0), alpha);
     positive + negative
 }
 

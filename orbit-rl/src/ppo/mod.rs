@@ -64,7 +64,7 @@ pub struct Ppo {
     /// how many actions it has taken.
     noise: Vec<EnvRng>,
     /// A gradient-free copy of the model used while collecting a rollout.
-    rollout_model: Option<ActorCritic>,
+    rollout_model: Option<rollout::RolloutModel>,
     /// The device tensors of each stored step (the update concatenates them instead of
     /// uploading the whole rollout at once).
     step_tensors: Vec<StepTensors>,

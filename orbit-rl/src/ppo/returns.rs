@@ -28,11 +28,12 @@ impl Ppo {
     pub fn compute_returns(&mut self, last_critic_obs: &[f32]) {
         let (n, nc) = (self.storage.num_envs, self.storage.num_critic_obs);
         let device = self.device.clone();
-        let mut last =
-            values(
-                self.rollout_model()
-                    .value(tensor2(last_critic_obs.to_vec(), n, nc, &device)),
-            );
+        let mut last = values(self.rollout_model().model.value(tensor2(
+            last_critic_obs.to_vec(),
+            n,
+            nc,
+            &device,
+        )));
         if let Some(normalizer) = &self.value_normalizer {
             normalizer.denormalize(&mut last);
         }

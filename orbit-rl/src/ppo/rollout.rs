@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::{Ppo, tensor2, values};
 use crate::RlError;
-use crate::model::ActorCritic;
+use crate::model::{ActorCritic, StackedActorCritic};
 use crate::storage::RolloutStorage;
 
 /// The tensors of one collected step that the update needs, already on the learner's device.
@@ -37,14 +37,24 @@ fn gaussian_log_prob(a: &[f32], mu: &[f32], sigma: &[f32]) -> f32 {
         .sum()
 }
 
+/// The gradient-free networks that collect a rollout, made at their first use after an update
+/// or a load.
+pub(super) struct RolloutModel {
+    /// A copy of the model.
+    pub(super) model: ActorCritic,
+    /// Its actor and critic stacked, where they can be (see [`StackedActorCritic`]).
+    stacked: Option<StackedActorCritic>,
+}
+
 impl Ppo {
     /// The gradient-free copy of the network that collects the rollout, made at its first use
     /// after an update or a load (with the action σ it samples with).
-    pub(super) fn rollout_model(&mut self) -> &ActorCritic {
+    pub(super) fn rollout_model(&mut self) -> &RolloutModel {
         if self.rollout_model.is_none() {
-            let m = self.model.valid();
-            self.sigma = values(m.action_std());
-            self.rollout_model = Some(m);
+            let model = self.model.valid();
+            self.sigma = values(model.action_std());
+            let stacked = StackedActorCritic::new(&model);
+            self.rollout_model = Some(RolloutModel { model, stacked });
         }
         self.rollout_model.as_ref().expect("just set")
     }
@@ -75,22 +85,48 @@ impl Ppo {
         // concatenated, once.
         let critic_input = (!std::ptr::eq(obs, critic_obs))
             .then(|| tensor2(parallel::to_vec(critic_obs), n, nc, &device));
-        let critic_view = critic_input.clone().unwrap_or_else(|| actor_input.clone());
-        let model = self.rollout_model();
-        let mean = model.action_mean(actor_input.clone());
+        let rollout = self.rollout_model();
         // Means and values come back in one read (each read waits for the device).
-        let out = values(Tensor::cat(vec![mean.clone(), model.value(critic_view)], 1));
+        let (mean, out, stacked) = match &rollout.stacked {
+            Some(stacked) => {
+                debug_assert_eq!(stacked.num_actions(), na);
+                let both = stacked.forward(actor_input.clone(), critic_input.clone());
+                let mean = both.clone().narrow(0, 0, 1).reshape([n, na]);
+                (mean, values(both), true)
+            }
+            None => {
+                let mean = rollout.model.action_mean(actor_input.clone());
+                let critic_view = critic_input.clone().unwrap_or_else(|| actor_input.clone());
+                let value = rollout.model.value(critic_view);
+                (
+                    mean.clone(),
+                    values(Tensor::cat(vec![mean, value], 1)),
+                    false,
+                )
+            }
+        };
         let s = &mut self.storage;
         let mu = RolloutStorage::rows(&mut s.mu, t, n, na);
         let value = RolloutStorage::rows(&mut s.values, t, n, 1);
-        mu.par_chunks_mut(na)
-            .zip(value.par_iter_mut())
-            .zip(out.par_chunks(na + 1))
-            .with_min_len(MIN_ENVS_PER_COPY_TASK)
-            .for_each(|((m, v), row)| {
-                m.copy_from_slice(&row[..na]);
-                *v = row[na];
-            });
+        if stacked {
+            // `[2, n, na]`: the means, then the values in each row's first column.
+            let (means, value_rows) = out.split_at(n * na);
+            mu.copy_from_slice(means);
+            value
+                .par_iter_mut()
+                .zip(value_rows.par_chunks(na))
+                .with_min_len(MIN_ENVS_PER_COPY_TASK)
+                .for_each(|(v, row)| *v = row[0]);
+        } else {
+            mu.par_chunks_mut(na)
+                .zip(value.par_iter_mut())
+                .zip(out.par_chunks(na + 1))
+                .with_min_len(MIN_ENVS_PER_COPY_TASK)
+                .for_each(|((m, v), row)| {
+                    m.copy_from_slice(&row[..na]);
+                    *v = row[na];
+                });
+        }
         if let Some(normalizer) = &self.value_normalizer {
             normalizer.denormalize(value);
         }
