@@ -89,14 +89,11 @@ impl StackedActorCritic {
 
 #[cfg(test)]
 mod tests {
-    use burn::tensor::{Device, TensorData};
+    use burn::tensor::Device;
 
     use super::*;
     use crate::cfg::{NoiseStdType, PolicyCfg};
-
-    fn values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
-        t.into_data().try_into_vec().unwrap()
-    }
+    use crate::ppo::{tensor2, values};
 
     fn cfg(actor: &[usize], critic: &[usize]) -> PolicyCfg {
         PolicyCfg {
@@ -120,7 +117,7 @@ mod tests {
         let obs: Vec<f32> = (0..rows * 5)
             .map(|i| ((i * 7) % 13) as f32 * 0.3 - 1.8)
             .collect();
-        let obs = Tensor::<2>::from_data(TensorData::new(obs, [rows, 5]), &device);
+        let obs = tensor2(obs, rows, 5, &device);
         let out = values(stacked.forward(obs.clone(), None));
         assert_eq!(out, values(stacked.forward(obs.clone(), Some(obs.clone()))));
         let mean = values(model.action_mean(obs.clone()));
