@@ -33,6 +33,8 @@ fn gpu_device() -> Result<Device, RlError> {
                 .setup(setup)
                 .init()
                 .map_err(|e| format!("burn could not use the Vulkan device: {e}"))?;
+            // The rollout's forward passes run as kernels of their own on the same device.
+            orbit_rl::share_wgpu_device(gpu.device.clone(), gpu.queue.clone());
             tracing::info!(adapter = %gpu.info.name, "learner on the physics' Vulkan device");
             Ok(device)
         })

@@ -33,6 +33,13 @@ pub use error::RlError;
 pub use orbit_envs::{VecEnv, VecEnvStep};
 pub use runner::{IterationLog, OnPolicyRunner, Policy};
 
+/// Shares the GPU learner's wgpu device and queue, so that rollouts are collected with
+/// forward passes of their own on it (one submission per step) instead of burn's.
+#[cfg(feature = "wgpu")]
+pub fn share_wgpu_device(device: orbit_mlp_wgpu::wgpu::Device, queue: orbit_mlp_wgpu::wgpu::Queue) {
+    orbit_mlp_wgpu::share_device(device, queue);
+}
+
 /// Random streams of the learner (`EnvRng` stream ids; the env's own are 1–6 and 19, in
 /// `orbit_core::rng::streams`).
 pub mod streams {

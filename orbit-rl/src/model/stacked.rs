@@ -85,6 +85,27 @@ impl StackedActorCritic {
     pub fn num_actions(&self) -> usize {
         self.num_actions
     }
+
+    /// The hidden layers' activation.
+    pub fn activation(&self) -> Activation {
+        self.activation
+    }
+
+    /// The widths: inputs, hidden layers, outputs (the actions).
+    pub fn widths(&self) -> Vec<usize> {
+        let mut widths = vec![self.layers[0].0.dims()[1]];
+        widths.extend(self.layers.iter().map(|(w, _)| w.dims()[2]));
+        widths
+    }
+
+    /// Every layer's weights `[2, d_in, d_out]` and biases `[2, d_out]`, row-major, read back
+    /// from the device (for a forward pass outside burn).
+    pub fn host_layers(&self) -> Vec<(Vec<f32>, Vec<f32>)> {
+        self.layers
+            .iter()
+            .map(|(w, b)| (crate::ppo::values(w.clone()), crate::ppo::values(b.clone())))
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -20,6 +20,8 @@ mod grad_clip;
 mod minibatch;
 mod returns;
 mod rollout;
+#[cfg(feature = "wgpu")]
+mod rollout_kernel;
 mod shuffle;
 mod tensor;
 mod update;
@@ -65,6 +67,13 @@ pub struct Ppo {
     noise: Vec<EnvRng>,
     /// A gradient-free copy of the model used while collecting a rollout.
     rollout_model: Option<rollout::RolloutModel>,
+    /// The collection pass as kernels of its own on a GPU learner's device (built at the first
+    /// rollout; `None` on the CPU or where the networks do not stack).
+    #[cfg(feature = "wgpu")]
+    rollout_kernel: Option<rollout_kernel::RolloutKernel>,
+    /// Whether building `rollout_kernel` was tried (a failure is reported once).
+    #[cfg(feature = "wgpu")]
+    rollout_kernel_tried: bool,
     /// The device tensors of each stored step (the update concatenates them instead of
     /// uploading the whole rollout at once).
     step_tensors: Vec<StepTensors>,
@@ -110,6 +119,10 @@ impl Ppo {
             seed,
             noise,
             rollout_model: None,
+            #[cfg(feature = "wgpu")]
+            rollout_kernel: None,
+            #[cfg(feature = "wgpu")]
+            rollout_kernel_tried: false,
             step_tensors: Vec::with_capacity(num_steps),
             sigma: Vec::new(),
             updates: 0,

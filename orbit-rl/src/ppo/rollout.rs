@@ -54,9 +54,36 @@ impl Ppo {
             let model = self.model.valid();
             self.sigma = values(model.action_std());
             let stacked = StackedActorCritic::new(&model);
+            #[cfg(feature = "wgpu")]
+            self.load_rollout_kernel(stacked.as_ref());
             self.rollout_model = Some(RolloutModel { model, stacked });
         }
         self.rollout_model.as_ref().expect("just set")
+    }
+
+    /// Builds the collection kernels at their first use and loads the current parameters into
+    /// them. Where they cannot be built the rollout is collected with burn's forward pass,
+    /// which gives the same values to float rounding; the reason is logged once.
+    #[cfg(feature = "wgpu")]
+    fn load_rollout_kernel(&mut self, stacked: Option<&StackedActorCritic>) {
+        use super::rollout_kernel::RolloutKernel;
+        let Some(stacked) = stacked else {
+            self.rollout_kernel = None;
+            return;
+        };
+        if !self.rollout_kernel_tried {
+            self.rollout_kernel_tried = true;
+            match RolloutKernel::for_learner(&self.device, stacked, self.storage.num_envs) {
+                Ok(kernel) => self.rollout_kernel = kernel,
+                Err(e) => tracing::warn!("collecting rollouts with burn's forward pass: {e}"),
+            }
+        }
+        if let Some(kernel) = &mut self.rollout_kernel
+            && let Err(e) = kernel.load(stacked)
+        {
+            tracing::warn!("collecting rollouts with burn's forward pass: {e}");
+            self.rollout_kernel = None;
+        }
     }
 
     /// Samples actions for the current observations (`a = μ + σ·ε`), writes them to `actions`
@@ -85,16 +112,32 @@ impl Ppo {
         // concatenated, once.
         let critic_input = (!std::ptr::eq(obs, critic_obs))
             .then(|| tensor2(parallel::to_vec(critic_obs), n, nc, &device));
-        let rollout = self.rollout_model();
+        self.rollout_model();
+        #[cfg(feature = "wgpu")]
+        let kernel_out = match self.rollout_kernel.as_mut() {
+            Some(kernel) => {
+                let separate = critic_input.is_some().then_some(critic_obs);
+                Some(kernel.forward(obs, separate)?.to_vec())
+            }
+            None => None,
+        };
+        #[cfg(not(feature = "wgpu"))]
+        let kernel_out: Option<Vec<f32>> = None;
+        let rollout = self.rollout_model.as_ref().expect("built above");
         // Means and values come back in one read (each read waits for the device).
-        let (mean, out, stacked) = match &rollout.stacked {
-            Some(stacked) => {
+        let (mean, out, stacked) = match (kernel_out, &rollout.stacked) {
+            // The kernels' outputs are laid out as the stacked pass's.
+            (Some(out), _) => {
+                let mean = tensor2(out[..n * na].to_vec(), n, na, &device);
+                (mean, out, true)
+            }
+            (None, Some(stacked)) => {
                 debug_assert_eq!(stacked.num_actions(), na);
                 let both = stacked.forward(actor_input.clone(), critic_input.clone());
                 let mean = both.clone().narrow(0, 0, 1).reshape([n, na]);
                 (mean, values(both), true)
             }
-            None => {
+            (None, None) => {
                 let mean = rollout.model.action_mean(actor_input.clone());
                 let critic_view = critic_input.clone().unwrap_or_else(|| actor_input.clone());
                 let value = rollout.model.value(critic_view);

@@ -1,0 +1,23 @@
+//! Batched forward passes of small dense networks (MLPs) in one wgpu submission: the policy and
+//! value networks that pick the actions of thousands of envs at every collection step.
+//!
+//! A GPU learner built on a tensor library pays host time for every tensor operation (recording
+//! it, matching it against fused kernels, handing it to the device's thread); a forward pass of
+//! two four-layer networks is a dozen such operations for well under a millisecond of device
+//! work. [`StackedMlp`] instead keeps its weights in its own buffers and runs every layer of
+//! several networks of equal widths ("stacks": an actor and a critic) as one dispatch per
+//! layer, uploading the inputs and reading the outputs back once per call.
+//!
+//! Each output is one invocation's sum over its inputs in a fixed order, so a pass gives the
+//! same bits on every run of the same device and driver (no atomics, no split sums).
+
+mod device;
+mod error;
+mod layer;
+
+pub use device::{share_device, shared_device};
+pub use error::MlpError;
+pub use layer::{Activation, StackedMlp};
+
+/// The wgpu crate this one is built on, for callers that hand it their device.
+pub use wgpu;

@@ -1,0 +1,75 @@
+//! The GPU learner's collection pass outside burn: the stacked actor and critic as
+//! [`orbit_mlp_wgpu::StackedMlp`] kernels on the learner's device, one submission and one read
+//! per step instead of a dozen tensor operations, each of which costs burn's GPU backend host
+//! time (docs/training.md).
+
+use burn::tensor::Device;
+use orbit_mlp_wgpu::{Activation as KernelActivation, StackedMlp};
+
+use crate::RlError;
+use crate::cfg::Activation;
+use crate::model::StackedActorCritic;
+
+/// The stacked networks' kernels and the buffer their outputs land in.
+pub(super) struct RolloutKernel {
+    mlp: StackedMlp,
+    /// `[2, rows, num_actions]`: the means, then the values in each row's first column.
+    out: Vec<f32>,
+}
+
+impl RolloutKernel {
+    /// The kernels for `stacked` on `rows` rows, where the learner runs on a GPU whose wgpu
+    /// device was shared (see [`orbit_mlp_wgpu::share_device`]); `None` on the CPU.
+    pub(super) fn for_learner(
+        device: &Device,
+        stacked: &StackedActorCritic,
+        rows: usize,
+    ) -> Result<Option<Self>, RlError> {
+        if device.clone().inner() == Device::flex() {
+            return Ok(None);
+        }
+        let Some((wgpu_device, queue)) = orbit_mlp_wgpu::shared_device() else {
+            return Ok(None);
+        };
+        let widths = stacked.widths();
+        let activation = match stacked.activation() {
+            Activation::Elu => KernelActivation::Elu,
+            Activation::Selu => KernelActivation::Selu,
+            Activation::Relu => KernelActivation::Relu,
+            Activation::Lrelu => KernelActivation::LeakyRelu,
+            Activation::Tanh => KernelActivation::Tanh,
+            Activation::Sigmoid => KernelActivation::Sigmoid,
+        };
+        let mlp = StackedMlp::new(&wgpu_device, &queue, rows, 2, &widths, activation)
+            .map_err(|e| RlError::Device(e.to_string()))?;
+        let out = vec![0.0; 2 * rows * widths.last().expect("a network has outputs")];
+        Ok(Some(Self { mlp, out }))
+    }
+
+    /// Copies `stacked`'s parameters into the kernels' buffers.
+    pub(super) fn load(&mut self, stacked: &StackedActorCritic) -> Result<(), RlError> {
+        for (l, (w, b)) in stacked.host_layers().iter().enumerate() {
+            self.mlp
+                .load_layer(l, w, b)
+                .map_err(|e| RlError::Device(e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// `[2, rows, num_actions]` for the actor's observations and the critic's (`None` where
+    /// it reads the actor's), as [`StackedActorCritic::forward`] lays them out.
+    pub(super) fn forward(
+        &mut self,
+        obs: &[f32],
+        critic_obs: Option<&[f32]>,
+    ) -> Result<&[f32], RlError> {
+        let inputs: Vec<&[f32]> = match critic_obs {
+            Some(c) => vec![obs, c],
+            None => vec![obs],
+        };
+        self.mlp
+            .forward(&inputs, &mut self.out)
+            .map_err(|e| RlError::Device(e.to_string()))?;
+        Ok(&self.out)
+    }
+}
