@@ -10,6 +10,11 @@ use crate::RlError;
 use crate::cfg::Activation;
 use crate::model::StackedActorCritic;
 
+/// The most rows (envs) the kernels collect for. They save burn's fixed host cost per step,
+/// which dominates small batches; larger batches amortise it, and there the kernels' second
+/// upload of the observations costs more than they save (docs/experiments/rollout-kernel.md).
+const MAX_ROWS: usize = 8192;
+
 /// The stacked networks' kernels and the buffer their outputs land in.
 pub(super) struct RolloutKernel {
     mlp: StackedMlp,
@@ -19,13 +24,14 @@ pub(super) struct RolloutKernel {
 
 impl RolloutKernel {
     /// The kernels for `stacked` on `rows` rows, where the learner runs on a GPU whose wgpu
-    /// device was shared (see [`orbit_mlp_wgpu::share_device`]); `None` on the CPU.
+    /// device was shared (see [`orbit_mlp_wgpu::share_device`]); `None` on the CPU or beyond
+    /// [`MAX_ROWS`].
     pub(super) fn for_learner(
         device: &Device,
         stacked: &StackedActorCritic,
         rows: usize,
     ) -> Result<Option<Self>, RlError> {
-        if device.clone().inner() == Device::flex() {
+        if rows > MAX_ROWS || device.clone().inner() == Device::flex() {
             return Ok(None);
         }
         let Some((wgpu_device, queue)) = orbit_mlp_wgpu::shared_device() else {
