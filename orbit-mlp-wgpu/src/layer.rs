@@ -60,6 +60,8 @@ struct Layer {
     n: usize,
     weight: wgpu::Buffer,
     bias: wgpu::Buffer,
+    /// The parameters as written to `params`.
+    p: Params,
     params: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
@@ -75,8 +77,6 @@ pub struct StackedMlp {
     rows: usize,
     stacks: usize,
     widths: Vec<usize>,
-    /// The kernel's code of the hidden layers' activation.
-    hidden_activation: u32,
     layers: Vec<Layer>,
     input: wgpu::Buffer,
     output: wgpu::Buffer,
@@ -211,6 +211,7 @@ impl StackedMlp {
                     n,
                     weight,
                     bias,
+                    p,
                     params,
                     bind_group,
                 }
@@ -223,28 +224,12 @@ impl StackedMlp {
             rows,
             stacks,
             widths: widths.to_vec(),
-            hidden_activation: activation.code(),
             layers,
             input,
             output,
             readback,
             shared_input: None,
         })
-    }
-
-    /// Rows per forward pass.
-    pub fn rows(&self) -> usize {
-        self.rows
-    }
-
-    /// Networks evaluated together.
-    pub fn stacks(&self) -> usize {
-        self.stacks
-    }
-
-    /// The widths: inputs, hidden layers, outputs.
-    pub fn widths(&self) -> &[usize] {
-        &self.widths
     }
 
     /// Sets layer `layer` of every network: `weight` `[stacks, d_in, d_out]` and `bias`
@@ -295,21 +280,10 @@ impl StackedMlp {
             )));
         }
         if self.shared_input != Some(shared) {
-            let first = &self.layers[0];
-            let p = Params {
-                rows: rows as u32,
-                n: first.n as u32,
-                k: first.k as u32,
-                x_stride: if shared { 0 } else { (rows * d_in) as u32 },
-                activation: if self.layers.len() == 1 {
-                    0
-                } else {
-                    self.hidden_activation
-                },
-                pad: [0; 3],
-            };
+            let first = &mut self.layers[0];
+            first.p.x_stride = if shared { 0 } else { (rows * d_in) as u32 };
             self.queue
-                .write_buffer(&first.params, 0, bytemuck::bytes_of(&p));
+                .write_buffer(&first.params, 0, bytemuck::bytes_of(&first.p));
             self.shared_input = Some(shared);
         }
         for (z, x) in inputs.iter().enumerate() {

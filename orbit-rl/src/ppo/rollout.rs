@@ -117,7 +117,7 @@ impl Ppo {
         let kernel_out = match self.rollout_kernel.as_mut() {
             Some(kernel) => {
                 let separate = critic_input.is_some().then_some(critic_obs);
-                Some(kernel.forward(obs, separate)?.to_vec())
+                Some(kernel.forward(obs, separate)?)
             }
             None => None,
         };

@@ -15,11 +15,11 @@ use crate::model::StackedActorCritic;
 /// upload of the observations costs more than they save (docs/experiments/rollout-kernel.md).
 const MAX_ROWS: usize = 8192;
 
-/// The stacked networks' kernels and the buffer their outputs land in.
+/// The stacked networks' kernels.
 pub(super) struct RolloutKernel {
     mlp: StackedMlp,
-    /// `[2, rows, num_actions]`: the means, then the values in each row's first column.
-    out: Vec<f32>,
+    /// Floats of [`Self::forward`]'s output.
+    outputs: usize,
 }
 
 impl RolloutKernel {
@@ -48,8 +48,8 @@ impl RolloutKernel {
         };
         let mlp = StackedMlp::new(&wgpu_device, &queue, rows, 2, &widths, activation)
             .map_err(|e| RlError::Device(e.to_string()))?;
-        let out = vec![0.0; 2 * rows * widths.last().expect("a network has outputs")];
-        Ok(Some(Self { mlp, out }))
+        let outputs = 2 * rows * widths.last().expect("a network has outputs");
+        Ok(Some(Self { mlp, outputs }))
     }
 
     /// Copies `stacked`'s parameters into the kernels' buffers.
@@ -68,14 +68,15 @@ impl RolloutKernel {
         &mut self,
         obs: &[f32],
         critic_obs: Option<&[f32]>,
-    ) -> Result<&[f32], RlError> {
+    ) -> Result<Vec<f32>, RlError> {
         let inputs: Vec<&[f32]> = match critic_obs {
             Some(c) => vec![obs, c],
             None => vec![obs],
         };
+        let mut out = vec![0.0; self.outputs];
         self.mlp
-            .forward(&inputs, &mut self.out)
+            .forward(&inputs, &mut out)
             .map_err(|e| RlError::Device(e.to_string()))?;
-        Ok(&self.out)
+        Ok(out)
     }
 }
