@@ -38,7 +38,8 @@ struct Args {
     /// Measured env steps per env count (after 20 warm-up steps).
     #[arg(long, default_value_t = 200)]
     steps: usize,
-    /// Worker threads (0 = one per core).
+    /// Worker threads of every parallel loop: the physics', the managers', the host copies'
+    /// (0 = one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Physics substeps per env step.
@@ -172,6 +173,13 @@ fn main() -> std::process::ExitCode {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
+    if args.threads > 0 {
+        // The managers and the host copies run on rayon's global pool; `sim.num_threads` sizes
+        // only the rapier backend's own.
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(args.threads)
+            .build_global()?;
+    }
     let scene = orbit::assets::box_pushing_scene(&args.overrides)?;
     let sim = SimCfg {
         backend: args.backend.clone(),
