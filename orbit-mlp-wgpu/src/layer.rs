@@ -76,7 +76,6 @@ pub struct StackedMlp {
     pipeline: wgpu::ComputePipeline,
     rows: usize,
     stacks: usize,
-    widths: Vec<usize>,
     layers: Vec<Layer>,
     input: wgpu::Buffer,
     output: wgpu::Buffer,
@@ -223,7 +222,6 @@ impl StackedMlp {
             pipeline,
             rows,
             stacks,
-            widths: widths.to_vec(),
             layers,
             input,
             output,
@@ -264,8 +262,8 @@ impl StackedMlp {
     /// The networks' outputs for `inputs` (`[rows, widths[0]]` each: one per network, or one
     /// that every network reads) into `out` (`[stacks, rows, outputs]`), waiting for the device.
     pub fn forward(&mut self, inputs: &[&[f32]], out: &mut [f32]) -> Result<(), MlpError> {
-        let (rows, d_in) = (self.rows, self.widths[0]);
-        let outputs = self.stacks * rows * self.widths.last().expect("two widths");
+        let (rows, d_in) = (self.rows, self.layers[0].k);
+        let outputs = self.stacks * rows * self.layers.last().expect("a layer").n;
         let shared = inputs.len() == 1;
         if !(shared || inputs.len() == self.stacks)
             || inputs.iter().any(|x| x.len() != rows * d_in)
