@@ -2,8 +2,8 @@
 //! kernel that runs reduced-coordinate articulation dynamics (RNEA, CRBA, Cholesky), free rigid
 //! bodies, primitive contacts (MuJoCo's soft constraints or Box2D's soft step) and a projected
 //! Gauss–Seidel solver with warm starting (see `docs/physics.md`). All envs share one topology:
-//! `codegen/` writes the scene-specific half of the kernel as straight-line code, `step.wgsl`
-//! is the rest. State stays on the GPU between steps and is read back, in exactly the layout the
+//! `codegen/` writes the scene-specific half of the kernel as straight-line code, the files of
+//! `step/` are the rest. State stays on the GPU between steps and is read back, in exactly the layout the
 //! batched views expose, when it is first looked at after a step (`mirror.rs`).
 //!
 //! Determinism: each env is computed by a fixed sequence of operations in one invocation, with

@@ -2,7 +2,7 @@
 //! initial pose): MuJoCo's
 //! `body_invweight0` (translational part) and `dof_invweight0`. MuJoCo scales a soft
 //! constraint's regulariser by these fixed numbers rather than by the row's exact
-//! `J M⁻¹ Jᵀ` (see `normal_row` in step.wgsl), so the contact softness does not change as the
+//! `J M⁻¹ Jᵀ` (see `normal_row` in step/constraints.wgsl), so the contact softness does not change as the
 //! arm moves; this backend does the same to follow MuJoCo's contact dynamics.
 
 use glam::{DMat3, DVec3};

@@ -45,7 +45,7 @@ impl Gen<'_> {
         c(self, "SHIFTED", shifted.to_string());
         c(self, "REPUBLISH", f(layout::REPUBLISH));
         let contact = &sim.contact;
-        // MuJoCo's rows (`normal_row` in step.wgsl); the soft step's as its target and
+        // MuJoCo's rows (`normal_row` in step/constraints.wgsl); the soft step's as its target and
         // regulariser scales.
         let (soft_step, relaxation, soft_target, soft_r) = match contact.model {
             ContactModel::MuJoCo => (false, SOLVER_RELAXATION, 0.0, 0.0),

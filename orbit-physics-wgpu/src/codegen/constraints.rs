@@ -14,7 +14,7 @@ const UNROLLED_LIMIT_DOFS: usize = 8;
 
 impl Gen<'_> {
     /// The narrow phase's view of the bodies: their poses copied into arrays that the
-    /// data-driven pair loop of `step.wgsl` indexes at run time, so that the articulation's
+    /// data-driven pair loop of `step/narrow_phase.wgsl` indexes at run time, so that the articulation's
     /// own arrays keep constant indices.
     pub(super) fn collide(&mut self) {
         let s = self.scene;

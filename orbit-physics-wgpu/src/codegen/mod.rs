@@ -8,8 +8,8 @@
 //! mass-matrix entries off the kinematic chain, a torque-driven joint's drive terms). The
 //! narrow phase stays a loop over the scene's geometry table (a uniform buffer, see
 //! [`CompiledScene::geometry_table`]): unrolled per shape pair it would be tens of thousands of
-//! instructions, more than an instruction cache holds. `step.wgsl`, the scene-independent half,
-//! is appended to what this module writes.
+//! instructions, more than an instruction cache holds. The scene-independent half, the files
+//! of `step/` in the order of [`STEP_WGSL`], is appended to what this module writes.
 //!
 //! This module is the driver (the order of the sections, the writer and the scene's topology
 //! queries they share, WGSL literals); each section of the kernel has its own module.
@@ -48,8 +48,20 @@ pub fn kernel_source(scene: &CompiledScene, sim: &SimCfg, workgroup: usize) -> S
     g.jacobians();
     g.limit_rows();
     g.integrate();
-    g.out + include_str!("../step.wgsl")
+    g.out + STEP_WGSL
 }
+
+/// The scene-independent half of the kernel, one file per concept: the per-invocation state and
+/// bindings, quaternion and matrix helpers, buffer addresses, the narrow phase, the constraint
+/// rows and their solver, and the substep with the entry point.
+const STEP_WGSL: &str = concat!(
+    include_str!("../step/state.wgsl"),
+    include_str!("../step/math.wgsl"),
+    include_str!("../step/addresses.wgsl"),
+    include_str!("../step/narrow_phase.wgsl"),
+    include_str!("../step/constraints.wgsl"),
+    include_str!("../step/substep.wgsl"),
+);
 
 /// The WGSL writer: the scene, the text so far and the current indentation.
 struct Gen<'a> {
