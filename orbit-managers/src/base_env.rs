@@ -130,6 +130,22 @@ impl StepTimings {
             + self.observations
     }
 
+    /// The time spent in each phase (and the steps taken) between `earlier`, a reading of the
+    /// same env, and this one.
+    pub fn since(&self, earlier: &StepTimings) -> StepTimings {
+        StepTimings {
+            steps: self.steps.saturating_sub(earlier.steps),
+            actions: self.actions.saturating_sub(earlier.actions),
+            physics: self.physics.saturating_sub(earlier.physics),
+            terminations: self.terminations.saturating_sub(earlier.terminations),
+            rewards: self.rewards.saturating_sub(earlier.rewards),
+            resets: self.resets.saturating_sub(earlier.resets),
+            commands: self.commands.saturating_sub(earlier.commands),
+            events: self.events.saturating_sub(earlier.events),
+            observations: self.observations.saturating_sub(earlier.observations),
+        }
+    }
+
     /// Phases by name, in step order.
     pub fn phases(&self) -> [(&'static str, Duration); 8] {
         [

@@ -121,6 +121,7 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
                 collection_time: 0.0,
                 env_time: 0.0,
                 physics_time: 0.0,
+                env_phase_times: Default::default(),
                 policy_time: 0.0,
                 learning_time: 0.0,
                 episode: Default::default(),
@@ -143,6 +144,10 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
             "Train/mean_reward" => log.mean_return = Some(v32),
             "Train/mean_episode_length" => log.mean_episode_length = Some(v32),
             "Train/success_rate" => log.success_rate = Some(v32),
+            other if env_phase(other).is_some() => {
+                let phase = env_phase(other).expect("matched above");
+                log.env_phase_times.insert(phase.to_string(), value);
+            }
             other => {
                 let key = other.strip_prefix("Episode/").unwrap_or(other);
                 log.episode.insert(key.to_string(), v32);
@@ -150,6 +155,12 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
         }
     }
     Ok(logs)
+}
+
+/// The env phase a `Perf/env_<phase>_time` tag names (not `Perf/env_time`, the whole step).
+fn env_phase(tag: &str) -> Option<&str> {
+    let phase = tag.strip_prefix("Perf/env_")?.strip_suffix("_time")?;
+    (!phase.is_empty()).then_some(phase)
 }
 
 /// An iteration's scalars under RSL-RL's TensorBoard tags. Episode-log keys containing `/`
@@ -171,6 +182,11 @@ pub fn scalars(log: &IterationLog) -> Vec<(String, f64)> {
         ("Perf/policy_time".into(), log.policy_time),
         ("Perf/learning_time".into(), log.learning_time),
     ];
+    v.extend(
+        log.env_phase_times
+            .iter()
+            .map(|(phase, &t)| (format!("Perf/env_{phase}_time"), t)),
+    );
     let optional = [
         ("Train/mean_reward", log.mean_return),
         ("Train/mean_episode_length", log.mean_episode_length),

@@ -65,6 +65,10 @@ pub struct IterationLog {
     /// Seconds of `env_time` spent in the physics backend (stepping, and reading the state
     /// back); 0 when the env does not report its phases.
     pub physics_time: f64,
+    /// Seconds of `env_time` spent in each of the env's other phases, by name (`actions`,
+    /// `terminations`, `rewards`, `resets`, `commands`, `events`, `observations`; see
+    /// `orbit_managers::StepTimings`); empty when the env does not report its phases.
+    pub env_phase_times: BTreeMap<String, f64>,
     /// Seconds of the collection spent in the policy: its forward pass, the action sampling and
     /// storing the transition.
     pub policy_time: f64,
@@ -265,7 +269,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             let mut interactions = 0u64;
             let mut env_time = 0.0;
             let mut policy_time = 0.0;
-            let physics_before = self.env.step_timings().map(|t| t.physics);
+            let timings_before = self.env.step_timings();
             if let Some(p) = progress.as_ref().filter(|_| it == first_iteration) {
                 p.phase(&format!(
                     "iteration {}: collecting {t_steps} steps × {n} envs (a first run on a GPU \
@@ -332,9 +336,14 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 &self.obs,
                 &self.critic_obs,
             ));
-            let physics_time = match (physics_before, self.env.step_timings()) {
-                (Some(before), Some(after)) => (after.physics - before).as_secs_f64(),
-                _ => 0.0,
+            let (physics_time, env_phase_times) = match (timings_before, self.env.step_timings()) {
+                (Some(before), Some(after)) => {
+                    let spent = after.since(&before);
+                    let others = spent.phases().into_iter().filter(|(p, _)| *p != "physics");
+                    let others = others.map(|(p, t)| (p.to_string(), t.as_secs_f64()));
+                    (spent.physics.as_secs_f64(), others.collect())
+                }
+                _ => (0.0, BTreeMap::new()),
             };
             let collection_time = start.elapsed().as_secs_f64();
             if let Some(p) = progress.as_ref().filter(|_| it == first_iteration) {
@@ -365,6 +374,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 collection_time,
                 env_time,
                 physics_time,
+                env_phase_times,
                 policy_time,
                 learning_time,
                 episode: episode

@@ -26,6 +26,10 @@ fn log(iteration: usize, success: Option<f32>) -> IterationLog {
         collection_time: 1.712_345,
         env_time: 0.25,
         physics_time: 0.125,
+        env_phase_times: BTreeMap::from([
+            ("observations".to_string(), 0.031_25),
+            ("resets".to_string(), 0.003_906_25),
+        ]),
         policy_time: 0.062_5,
         learning_time: 0.412_5,
         episode: BTreeMap::from([

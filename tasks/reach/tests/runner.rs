@@ -50,9 +50,40 @@ fn timeless(h: &IterationLog) -> IterationLog {
         collection_time: 0.0,
         env_time: 0.0,
         physics_time: 0.0,
+        env_phase_times: Default::default(),
         policy_time: 0.0,
         learning_time: 0.0,
         ..h.clone()
+    }
+}
+
+/// Every phase of the env's step is logged, and the phases, all measured inside the env's
+/// `step`, add up to no more than the time spent there.
+#[test]
+fn env_phases_add_up_to_the_env_time() {
+    let mut r = runner(3, None, &[]);
+    r.learn(2).unwrap();
+    for h in &r.history {
+        let names: Vec<&str> = h.env_phase_times.keys().map(String::as_str).collect();
+        assert_eq!(
+            names,
+            [
+                "actions",
+                "commands",
+                "events",
+                "observations",
+                "resets",
+                "rewards",
+                "terminations"
+            ]
+        );
+        let phases: f64 = h.physics_time + h.env_phase_times.values().sum::<f64>();
+        assert!(h.physics_time > 0.0 && h.env_phase_times["observations"] > 0.0);
+        assert!(
+            phases <= h.env_time,
+            "phases {phases} s, env {} s",
+            h.env_time
+        );
     }
 }
 
