@@ -144,14 +144,15 @@ pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
             "Train/mean_reward" => log.mean_return = Some(v32),
             "Train/mean_episode_length" => log.mean_episode_length = Some(v32),
             "Train/success_rate" => log.success_rate = Some(v32),
-            other if env_phase(other).is_some() => {
-                let phase = env_phase(other).expect("matched above");
-                log.env_phase_times.insert(phase.to_string(), value);
-            }
-            other => {
-                let key = other.strip_prefix("Episode/").unwrap_or(other);
-                log.episode.insert(key.to_string(), v32);
-            }
+            other => match env_phase(other) {
+                Some(phase) => {
+                    log.env_phase_times.insert(phase.to_string(), value);
+                }
+                None => {
+                    let key = other.strip_prefix("Episode/").unwrap_or(other);
+                    log.episode.insert(key.to_string(), v32);
+                }
+            },
         }
     }
     Ok(logs)
