@@ -19,6 +19,7 @@ pub mod logger;
 pub mod model;
 pub mod normalizer;
 pub mod plot;
+pub mod policy;
 pub mod ppo;
 mod progress;
 pub mod run_dir;
@@ -31,7 +32,8 @@ pub use cfg::{LearnerDevice, RunnerCfg};
 pub use collective::Collective;
 pub use error::RlError;
 pub use orbit_envs::{VecEnv, VecEnvStep};
-pub use runner::{IterationLog, OnPolicyRunner, Policy};
+pub use policy::Policy;
+pub use runner::{IterationLog, OnPolicyRunner};
 
 /// Shares the GPU learner's wgpu device and queue, so that rollouts are collected with
 /// forward passes of their own on it (one submission per step) instead of burn's.

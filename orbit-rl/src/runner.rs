@@ -14,7 +14,8 @@ use crate::collective::{self, Collective};
 use crate::logger::ScalarLog;
 use crate::model::ActorCritic;
 use crate::normalizer::EmpiricalNormalizer;
-use crate::ppo::{LossStats, Ppo, tensor2, values};
+use crate::policy::Policy;
+use crate::ppo::{LossStats, Ppo, values};
 use burn::module::Module;
 use burn::tensor::Device;
 use orbit_envs::VecEnv;
@@ -470,13 +471,13 @@ impl<E: VecEnv> OnPolicyRunner<E> {
 
     /// The current policy for inference (mean actions, current normaliser).
     pub fn inference_policy(&self) -> Policy {
-        Policy {
-            model: self.alg.model.valid(),
-            normalizer: self.obs_normalizer.clone(),
-            device: self.device.clone(),
-            num_obs: self.env.num_obs(),
-            num_actions: self.env.num_actions(),
-        }
+        Policy::new(
+            self.alg.model.valid(),
+            self.obs_normalizer.clone(),
+            self.device.clone(),
+            self.env.num_obs(),
+            self.env.num_actions(),
+        )
     }
 
     /// Writes `model_<it>.{bpk,adam.bpk,json}` into the run directory (`it` = the last
@@ -563,54 +564,4 @@ fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
         i / dim,
         values[i]
     )))
-}
-
-/// A trained policy for inference: observation normaliser + actor, mean actions.
-pub struct Policy {
-    model: ActorCritic,
-    normalizer: Option<EmpiricalNormalizer>,
-    device: Device,
-    num_obs: usize,
-    num_actions: usize,
-}
-
-impl Policy {
-    /// Loads a checkpoint (`base` without extension) onto `device`.
-    pub fn load(base: &Path, device: Device) -> Result<Self, RlError> {
-        let state = read_state(base)?;
-        let model = ActorCritic::new(
-            &state.policy,
-            state.num_obs,
-            state.num_critic_obs,
-            state.num_actions,
-            0,
-            &device,
-        );
-        let model = crate::ppo::load_model(model, base)?;
-        Ok(Self {
-            model,
-            normalizer: state.obs_normalizer,
-            device,
-            num_obs: state.num_obs,
-            num_actions: state.num_actions,
-        })
-    }
-
-    /// Observation width the policy expects.
-    pub fn num_obs(&self) -> usize {
-        self.num_obs
-    }
-
-    /// Mean actions for a batch of raw observations (`[rows, num_obs]`).
-    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
-        let mut x = obs.to_vec();
-        if let Some(n) = &self.normalizer {
-            n.normalize(&mut x);
-        }
-        let rows = x.len() / self.num_obs;
-        let t = tensor2(x, rows, self.num_obs, &self.device);
-        let a = values(self.model.action_mean(t));
-        debug_assert_eq!(a.len(), rows * self.num_actions);
-        a
-    }
 }

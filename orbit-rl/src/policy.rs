@@ -1,0 +1,80 @@
+//! A trained policy for inference (RSL-RL's `get_inference_policy`): a checkpoint's
+//! observation normaliser and actor, giving mean actions.
+
+use std::path::Path;
+
+use burn::tensor::Device;
+
+use crate::RlError;
+use crate::checkpoint::read_state;
+use crate::model::ActorCritic;
+use crate::normalizer::EmpiricalNormalizer;
+use crate::ppo::{tensor2, values};
+
+/// A trained policy for inference: observation normaliser + actor, mean actions.
+pub struct Policy {
+    model: ActorCritic,
+    normalizer: Option<EmpiricalNormalizer>,
+    device: Device,
+    num_obs: usize,
+    num_actions: usize,
+}
+
+impl Policy {
+    /// The policy of `model` (its actor) behind `normalizer`, for `num_obs` observations and
+    /// `num_actions` actions.
+    pub(crate) fn new(
+        model: ActorCritic,
+        normalizer: Option<EmpiricalNormalizer>,
+        device: Device,
+        num_obs: usize,
+        num_actions: usize,
+    ) -> Self {
+        Self {
+            num_obs,
+            model,
+            normalizer,
+            device,
+            num_actions,
+        }
+    }
+
+    /// Loads a checkpoint (`base` without extension) onto `device`.
+    pub fn load(base: &Path, device: Device) -> Result<Self, RlError> {
+        let state = read_state(base)?;
+        let model = ActorCritic::new(
+            &state.policy,
+            state.num_obs,
+            state.num_critic_obs,
+            state.num_actions,
+            0,
+            &device,
+        );
+        let model = crate::ppo::load_model(model, base)?;
+        Ok(Self::new(
+            model,
+            state.obs_normalizer,
+            device,
+            state.num_obs,
+            state.num_actions,
+        ))
+    }
+
+    /// Observation width the policy expects.
+    pub fn num_obs(&self) -> usize {
+        self.num_obs
+    }
+
+    /// Mean actions for a batch of raw observations (`[rows, num_obs]`).
+    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
+        let mut x = obs.to_vec();
+        if let Some(n) = &self.normalizer {
+            n.normalize(&mut x);
+        }
+        let rows = x.len() / self.num_obs;
+        let t = tensor2(x, rows, self.num_obs, &self.device);
+        let a = values(self.model.action_mean(t));
+        debug_assert_eq!(a.len(), rows * self.num_actions);
+        a
+    }
+}
