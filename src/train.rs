@@ -12,6 +12,7 @@ use orbit_rl::run_dir::{ENV_CONFIG_FILE, PARAMS_DIR, create_run_dir, find_checkp
 use orbit_rl::{OnPolicyRunner, RlError, RunnerCfg, VecEnv};
 
 mod ranks;
+mod warm_up;
 pub use ranks::{AUTO_MIN_ENVS_PER_RANK, AUTO_RANKS_MAX, RankCount, thread_ranks};
 
 /// The training config in a run's `params/` (`--agent-config` takes it back).
@@ -369,7 +370,8 @@ fn train_rank(
             &cfg.run_name,
         )?),
     };
-    let mut runner = match start_runner(
+    // The warm-up, if any, may still be compiling: it ends (is joined) when this returns.
+    let (mut runner, _warm_up) = match start_runner(
         args,
         &run,
         &env_doc,
@@ -405,8 +407,12 @@ fn train_rank(
     Ok(runner)
 }
 
+/// A run's runner.
+type Runner = OnPolicyRunner<Box<dyn VecEnv>>;
+
 /// Writes the run's `params/`, builds its env and a runner logging into `dir` (none: a rank
-/// of a data-parallel run that does not log), and loads the checkpoint to resume from.
+/// of a data-parallel run that does not log), and loads the checkpoint to resume from; with
+/// it, the learner's warm-up, which may still be running.
 fn start_runner(
     args: &TrainArgs,
     run: &ResolvedRun,
@@ -415,7 +421,7 @@ fn start_runner(
     resume_from: Option<&Path>,
     show_progress: bool,
     share: usize,
-) -> Result<OnPolicyRunner<Box<dyn VecEnv>>, Box<dyn std::error::Error>> {
+) -> Result<(Runner, warm_up::WarmUp), Box<dyn std::error::Error>> {
     if let Some(dir) = dir {
         write_params(dir, run, env_doc)?;
     }
@@ -428,13 +434,23 @@ fn start_runner(
         println!("{}: building the env…", run.configs.name);
     }
     let build_start = std::time::Instant::now();
+    let cfg = run.agent.clone();
+    let device = crate::learner::learner_device(cfg.device)?;
+    // A single-process GPU learner compiles its kernels while the env builds.
+    let num_envs = orbit_core::config::node_at(env_doc, "num_envs")
+        .and_then(|n| orbit_core::config::from_node::<usize>(n).ok());
+    let warm_up = match num_envs {
+        Some(n) if share == 1 && cfg.device == orbit_rl::LearnerDevice::Gpu => {
+            warm_up::WarmUp::spawn(run, n, cfg.clone(), device.clone())
+        }
+        _ => warm_up::WarmUp::none(),
+    };
     let (vec_env, _) = crate::make_vec_env(
         &run.configs,
         &run.env_overrides,
         &run.black_box_overrides,
         video,
     )?;
-    let cfg = run.agent.clone();
     if let Some(dir) = dir {
         println!(
             "{}: {} envs × {} steps per iteration, {} iterations (env built in {:.1} s); run \
@@ -447,7 +463,6 @@ fn start_runner(
             dir.display()
         );
     }
-    let device = crate::learner::learner_device(cfg.device)?;
     let mut runner = OnPolicyRunner::new(vec_env, cfg, dir.map(Path::to_path_buf), device)?;
     if let Some(base) = resume_from {
         if dir.is_some() {
@@ -455,5 +470,5 @@ fn start_runner(
         }
         runner.load_checkpoint(base)?;
     }
-    Ok(runner)
+    Ok((runner, warm_up))
 }
