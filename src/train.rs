@@ -436,11 +436,16 @@ fn start_runner(
     let build_start = std::time::Instant::now();
     let cfg = run.agent.clone();
     let device = crate::learner::learner_device(cfg.device)?;
-    // A single-process GPU learner compiles its kernels while the env builds.
+    // A single-process GPU learner compiles its kernels while the env builds its physics
+    // kernel on a GPU. Where the physics runs on the CPU (rapier, or the kernel on a CPU
+    // adapter) the two would share the CPU's cores, and the warm-up's iteration only adds
+    // work (docs/experiments/learner-warm-up.md).
     let num_envs = orbit_core::config::node_at(env_doc, "num_envs")
         .and_then(|n| orbit_core::config::from_node::<usize>(n).ok());
     let warm_up = match num_envs {
-        Some(n) if share == 1 && cfg.device == orbit_rl::LearnerDevice::Gpu => {
+        Some(n)
+            if share == 1 && cfg.device == orbit_rl::LearnerDevice::Gpu && !run.physics_on_cpu =>
+        {
             warm_up::WarmUp::spawn(run, n, cfg.clone(), device.clone())
         }
         _ => warm_up::WarmUp::none(),
