@@ -21,12 +21,10 @@ use super::ResolvedRun;
 /// An env with a run's shapes whose observations and rewards are zeros and whose episodes do
 /// not end: what a learner needs to compile every kernel of an iteration.
 pub(crate) struct ShapeOnlyEnv {
-    num_envs: usize,
     num_actions: usize,
     num_obs: usize,
     num_critic_obs: usize,
     max_episode_length: u32,
-    interactions: u32,
     obs: Vec<f32>,
     critic_obs: Vec<f32>,
     rewards: Vec<f32>,
@@ -38,12 +36,10 @@ impl ShapeOnlyEnv {
     /// `num_envs` envs of `env`'s widths.
     pub(crate) fn like(env: &dyn VecEnv, num_envs: usize) -> Self {
         Self {
-            num_envs,
             num_actions: env.num_actions(),
             num_obs: env.num_obs(),
             num_critic_obs: env.num_critic_obs(),
             max_episode_length: env.max_episode_length(),
-            interactions: 1,
             obs: vec![0.0; num_envs * env.num_obs()],
             critic_obs: vec![0.0; num_envs * env.num_critic_obs()],
             rewards: vec![0.0; num_envs],
@@ -55,7 +51,7 @@ impl ShapeOnlyEnv {
 
 impl VecEnv for ShapeOnlyEnv {
     fn num_envs(&self) -> usize {
-        self.num_envs
+        self.rewards.len()
     }
 
     fn num_actions(&self) -> usize {
@@ -89,7 +85,7 @@ impl VecEnv for ShapeOnlyEnv {
             terminated: &self.flags,
             time_outs: &self.flags,
             log: &self.log,
-            interactions: self.interactions,
+            interactions: 1,
         })
     }
 
