@@ -6,7 +6,7 @@
 //! other way: packed on the host, uploaded compactly and put in place by a second kernel,
 //! instead of uploading every row between the lowest and the highest env written.
 
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, KernelChecks};
 use crate::layout::BufferLayout;
 
 /// Invocations per workgroup of the gather kernel (one float each).
@@ -138,7 +138,7 @@ impl RowGather {
             })
         };
         let pipeline = gpu
-            .pipeline(&gather_source())
+            .pipeline(&gather_source(), KernelChecks::Checked)
             .expect("the fixed gather kernel builds");
         let bind_group = bind(
             "orbit gather",
@@ -146,7 +146,7 @@ impl RowGather {
             [state, &ids, &cols_buf, &out, &params],
         );
         let write_pipeline = gpu
-            .pipeline(&write_source())
+            .pipeline(&write_source(), KernelChecks::Checked)
             .expect("the fixed write kernel builds");
         let write_bind_group = bind(
             "orbit write",

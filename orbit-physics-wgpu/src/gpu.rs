@@ -23,17 +23,35 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// The device's limits (the adapter's, all requested).
     pub limits: wgpu::Limits,
-    /// Compiled kernels by WGSL source: backends of the same scene share one (compiling is
-    /// slow, seconds on a CPU Vulkan driver).
-    pipelines: Mutex<HashMap<String, wgpu::ComputePipeline>>,
+    /// Compiled kernels by WGSL source and checks: backends of the same scene share one
+    /// (compiling is slow, seconds on a CPU Vulkan driver).
+    pipelines: Mutex<HashMap<(KernelChecks, String), wgpu::ComputePipeline>>,
+}
+
+/// The run-time checks wgpu adds to a kernel's code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum KernelChecks {
+    /// All of wgpu's checks (the default for WGSL it has not seen before).
+    Checked,
+    /// Without the clamps of run-time array indices and without the counters wgpu puts on
+    /// every loop; buffer accesses stay bounds-checked by the device's robust buffer access,
+    /// and integer divisions keep their guards. Only for kernels whose private arrays are
+    /// indexed below their lengths and whose loops end, by construction.
+    Trusted,
 }
 
 impl Gpu {
-    /// The compute pipeline of a WGSL source with entry point `main`, compiled once; an error
-    /// says what the driver reported (a kernel it cannot compile, memory it cannot give).
-    pub fn pipeline(&self, source: &str) -> Result<wgpu::ComputePipeline, String> {
+    /// The compute pipeline of a WGSL source with entry point `main` and the given run-time
+    /// checks, compiled once; an error says what the driver reported (a kernel it cannot
+    /// compile, memory it cannot give).
+    pub(crate) fn pipeline(
+        &self,
+        source: &str,
+        checks: KernelChecks,
+    ) -> Result<wgpu::ComputePipeline, String> {
         let mut cache = self.pipelines.lock().expect("pipeline cache lock");
-        if let Some(p) = cache.get(source) {
+        let key = (checks, source.to_string());
+        if let Some(p) = cache.get(&key) {
             return Ok(p.clone());
         }
         let scopes = [
@@ -42,12 +60,21 @@ impl Gpu {
             wgpu::ErrorFilter::Internal,
         ]
         .map(|filter| self.device.push_error_scope(filter));
-        let module = self
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("orbit step"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
+        let mut runtime_checks = wgpu::ShaderRuntimeChecks::checked();
+        if checks == KernelChecks::Trusted {
+            runtime_checks.bounds_checks = false;
+            runtime_checks.force_loop_bounding = false;
+        }
+        let descriptor = wgpu::ShaderModuleDescriptor {
+            label: Some("orbit step"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        };
+        // SAFETY: `Trusted` is asked for only by kernels that meet its conditions (see
+        // `KernelChecks`); `Checked` keeps every check.
+        let module = unsafe {
+            self.device
+                .create_shader_module_trusted(descriptor, runtime_checks)
+        };
         let pipeline = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -64,7 +91,7 @@ impl Gpu {
                 return Err(format!("the GPU driver could not build the kernel: {e}"));
             }
         }
-        cache.insert(source.to_string(), pipeline.clone());
+        cache.insert(key, pipeline.clone());
         Ok(pipeline)
     }
 }

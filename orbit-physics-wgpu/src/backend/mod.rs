@@ -7,6 +7,8 @@
 mod dispatch;
 mod physics_backend;
 mod readback;
+#[cfg(test)]
+mod tests;
 mod timer;
 mod upload;
 
@@ -19,7 +21,7 @@ use crate::BACKEND_NAME;
 use crate::codegen;
 use crate::compile::CompiledScene;
 use crate::gather::RowGather;
-use crate::gpu::{self, Gpu};
+use crate::gpu::{self, Gpu, KernelChecks};
 use crate::layout::BufferLayout;
 use crate::mirror::HostMirror;
 use readback::Stale;
@@ -81,6 +83,21 @@ fn err(reason: String) -> PhysicsError {
 impl WgpuBackend {
     /// Builds `num_envs` copies of `scene` on the process's GPU.
     pub fn new(desc: &SceneDesc, num_envs: usize, sim: &SimCfg) -> Result<Self, PhysicsError> {
+        // The step kernel meets `KernelChecks::Trusted`'s conditions: its contacts stop at
+        // `MAX_C`, its limit rows at one per dof, its walks down the tree of dofs at the root,
+        // and every other private array is indexed by the scene's own tables; its loops run
+        // over those counts or a fixed number of sweeps. The checks wgpu would add cost a
+        // fifth of the Ant's step (docs/experiments/trusted-step-kernel.md).
+        Self::build(desc, num_envs, sim, KernelChecks::Trusted)
+    }
+
+    /// [`WgpuBackend::new`] with the step kernel compiled with the given run-time checks.
+    fn build(
+        desc: &SceneDesc,
+        num_envs: usize,
+        sim: &SimCfg,
+        checks: KernelChecks,
+    ) -> Result<Self, PhysicsError> {
         sim.validate()?;
         if num_envs == 0 {
             return Err(PhysicsError::InvalidInput(
@@ -124,7 +141,7 @@ impl WgpuBackend {
             )));
         }
         let source = codegen::kernel_source(&scene, sim, WORKGROUP);
-        let pipeline = gpu.pipeline(&source).map_err(err)?;
+        let pipeline = gpu.pipeline(&source, checks).map_err(err)?;
         let device = &gpu.device;
         let storage = |label: &str, floats: usize| {
             device.create_buffer(&wgpu::BufferDescriptor {
