@@ -18,7 +18,7 @@ use orbit_core::physics::{PhysicsError, SceneLayout, SimCfg};
 use orbit_core::scene::SceneDesc;
 
 use crate::BACKEND_NAME;
-use crate::codegen;
+use crate::codegen::{self, KernelForm};
 use crate::compile::CompiledScene;
 use crate::gather::RowGather;
 use crate::gpu::{self, Gpu, KernelChecks};
@@ -88,15 +88,17 @@ impl WgpuBackend {
         // and every other private array is indexed by the scene's own tables; its loops run
         // over those counts or a fixed number of sweeps. The checks wgpu would add cost a
         // fifth of the Ant's step (docs/experiments/trusted-step-kernel.md).
-        Self::build(desc, num_envs, sim, KernelChecks::Trusted)
+        Self::build(desc, num_envs, sim, KernelChecks::Trusted, None)
     }
 
-    /// [`WgpuBackend::new`] with the step kernel compiled with the given run-time checks.
+    /// [`WgpuBackend::new`] with the step kernel compiled with the given run-time checks, in
+    /// `form` (by default the scene's, [`KernelForm::for_scene`]).
     fn build(
         desc: &SceneDesc,
         num_envs: usize,
         sim: &SimCfg,
         checks: KernelChecks,
+        form: Option<KernelForm>,
     ) -> Result<Self, PhysicsError> {
         sim.validate()?;
         if num_envs == 0 {
@@ -140,7 +142,8 @@ impl WgpuBackend {
                 limits.max_uniform_buffer_binding_size
             )));
         }
-        let source = codegen::kernel_source(&scene, sim, WORKGROUP);
+        let form = form.unwrap_or_else(|| KernelForm::for_scene(&scene));
+        let source = codegen::kernel_source(&scene, sim, WORKGROUP, form);
         let pipeline = gpu.pipeline(&source, checks).map_err(err)?;
         let device = &gpu.device;
         let storage = |label: &str, floats: usize| {

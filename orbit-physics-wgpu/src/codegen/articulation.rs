@@ -329,7 +329,7 @@ impl Gen<'_> {
     /// only a dof and its ancestors: it fills nothing in, and loops keep the kernel small for
     /// many dofs (an unrolled dense Cholesky grows as n³ and the shader compilers slow down
     /// with it).
-    fn tree_factorisation(&mut self) {
+    pub(super) fn tree_factorisation(&mut self) {
         let parents: Vec<String> = self.dof_parents().iter().map(|p| p.to_string()).collect();
         self.line("// Each dof's parent in its articulation's tree of dofs (-1: none).");
         self.line(format!(

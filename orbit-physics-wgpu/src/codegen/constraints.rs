@@ -47,7 +47,6 @@ impl Gen<'_> {
 
     /// Row Jacobians of points on links, and the arm parts of the rows.
     pub(super) fn jacobians(&mut self) {
-        let nd = self.nd();
         self.line("// Adds s times the generalised-force direction of a unit impulse along d at p on body b to jt;");
         self.line("// false if b moves no dof.");
         self.open("fn body_jt(b: i32, p: vec3<f32>, d: vec3<f32>, s: f32, jt: ptr<function, array<f32, ND1>>) -> bool");
@@ -73,6 +72,14 @@ impl Gen<'_> {
         self.line("return false;");
         self.close();
         self.line("");
+        self.arm_rows();
+    }
+
+    /// The rows' storage and the arm parts of the rows, unrolled over the dofs in both forms:
+    /// the solver's sweeps run them for every row, and unrolled, a row's loads from the
+    /// storage buffer are issued together rather than one after another.
+    pub(super) fn arm_rows(&mut self) {
+        let nd = self.nd();
         let (rj, rw) = self.row_storage();
         let (rj, rw) = (|i: &str| rj.replace('#', i), |i: &str| rw.replace('#', i));
         self.line("// Stores a row's arm Jacobian and W = A⁻¹ Jᵀ at `base`; returns J W.");

@@ -29,6 +29,13 @@ impl Gen<'_> {
             ));
             self.close();
         }
+        self.integrate_object_lines();
+        self.close();
+        self.line("");
+    }
+
+    /// Semi-implicit Euler of the free objects (quaternions renormalised).
+    pub(super) fn integrate_object_lines(&mut self) {
         for (o, obj) in self.scene.objects.iter().enumerate() {
             self.open("");
             self.line(format!("let com = ocom[{o}] + DT * ovel[{o}];"));
@@ -42,7 +49,5 @@ impl Gen<'_> {
             ));
             self.close();
         }
-        self.close();
-        self.line("");
     }
 }

@@ -1,15 +1,18 @@
 //! Kernel generation: the scene-specific half of the WGSL kernel, written from the compiled
-//! scene as straight-line code.
+//! scene, in one of two forms ([`KernelForm`]).
 //!
-//! Every env shares one topology, so each loop over links, dofs, free objects and shape pairs
-//! can be unrolled here, with the scene's numbers as literals and every array index a constant.
-//! The driver then keeps the articulation's quantities in registers instead of the local memory
-//! that run-time indexed tables need, drops work on structural zeros (a root link's inertia,
-//! mass-matrix entries off the kinematic chain, a torque-driven joint's drive terms). The
-//! narrow phase stays a loop over the scene's geometry table (a uniform buffer, see
-//! [`CompiledScene::geometry_table`]): unrolled per shape pair it would be tens of thousands of
-//! instructions, more than an instruction cache holds. The scene-independent half, the files
-//! of `step/` in the order of [`STEP_WGSL`], is appended to what this module writes.
+//! Every env shares one topology, so in the straight-line form each loop over links, dofs, free
+//! objects and shape pairs is unrolled here, with the scene's numbers as literals and every
+//! array index a constant. The driver then keeps the articulation's quantities in registers
+//! instead of the local memory that run-time indexed tables need, drops work on structural
+//! zeros (a root link's inertia, mass-matrix entries off the kinematic chain, a torque-driven
+//! joint's drive terms). Shader compilers take far longer than linearly on long straight-line
+//! code, so large articulations get the looped form: the scene as tables, read by the loops of
+//! `step/articulation_loops.wgsl`. In both, the narrow phase stays a loop over the scene's
+//! geometry table (a uniform buffer, see [`CompiledScene::geometry_table`]): unrolled per
+//! shape pair it would be tens of thousands of instructions, more than an instruction cache
+//! holds. The scene-independent half, the files of `step/` in the order of [`STEP_WGSL`], is
+//! appended to what this module writes.
 //!
 //! This module is the driver (the order of the sections, the writer and the scene's topology
 //! queries they share, WGSL literals); each section of the kernel has its own module.
@@ -20,6 +23,7 @@ mod constraints;
 
 pub(crate) use constraints::row_storage_floats;
 mod integrate;
+mod looped;
 mod objects;
 mod state_io;
 
@@ -28,28 +32,74 @@ use orbit_core::physics::SimCfg;
 
 use crate::compile::{ArticulationBlock, CompiledScene, FreeRoot};
 
-/// The full WGSL source of the step kernel for `scene`, with `workgroup` invocations per
-/// workgroup.
-pub fn kernel_source(scene: &CompiledScene, sim: &SimCfg, workgroup: usize) -> String {
+/// Beyond this many dofs the articulation is written as loops over tables
+/// ([`KernelForm::Looped`]).
+const STRAIGHT_LINE_DOFS: usize = 16;
+
+/// How the kernel spells out the articulation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelForm {
+    /// Straight-line code with the scene's numbers as literals: the fastest kernel, for
+    /// articulations of up to [`STRAIGHT_LINE_DOFS`] dofs.
+    StraightLine,
+    /// Loops over the scene's link and dof tables: a kernel of about the same length whatever
+    /// the articulation, which NVIDIA's driver builds in half the time of the Humanoid's
+    /// straight-line one (docs/experiments/looped-kernel.md).
+    Looped,
+}
+
+impl KernelForm {
+    /// The form for `scene`: straight-line code up to [`STRAIGHT_LINE_DOFS`] dofs.
+    pub fn for_scene(scene: &CompiledScene) -> Self {
+        if scene.dofs.len() > STRAIGHT_LINE_DOFS {
+            Self::Looped
+        } else {
+            Self::StraightLine
+        }
+    }
+}
+
+/// The full WGSL source of the step kernel for `scene` in `form`, with `workgroup`
+/// invocations per workgroup.
+pub fn kernel_source(
+    scene: &CompiledScene,
+    sim: &SimCfg,
+    workgroup: usize,
+    form: KernelForm,
+) -> String {
     let mut g = Gen {
         scene,
         out: String::new(),
         indent: 0,
     };
     g.constants(sim, workgroup);
-    g.state_io();
-    g.kinematics();
-    g.rnea_bias();
-    g.crba();
-    g.cholesky();
-    g.drives();
+    match form {
+        KernelForm::StraightLine => {
+            g.state_io();
+            g.kinematics();
+            g.rnea_bias();
+            g.crba();
+            g.cholesky();
+            g.drives();
+        }
+        KernelForm::Looped => g.looped_articulation(),
+    }
     g.objects();
     g.collide();
-    g.jacobians();
-    g.limit_rows();
-    g.integrate();
-    g.out + STEP_WGSL
+    if form == KernelForm::StraightLine {
+        g.jacobians();
+        g.limit_rows();
+        g.integrate();
+    }
+    let mut src = g.out + STEP_WGSL;
+    if form == KernelForm::Looped {
+        src.push_str(LOOPS_WGSL);
+    }
+    src
 }
+
+/// The looped form's articulation passes, appended after [`STEP_WGSL`].
+const LOOPS_WGSL: &str = include_str!("../step/articulation_loops.wgsl");
 
 /// The scene-independent half of the kernel, one file per concept: the per-invocation state and
 /// bindings, quaternion and matrix helpers, buffer addresses, the narrow phase, the constraint
@@ -215,23 +265,33 @@ mod tests {
     use orbit_core::physics::SimCfg;
     use orbit_core::scene::{RootStateCfg, SceneCfg};
 
-    use super::kernel_source;
+    use super::{KernelForm, kernel_source};
     use crate::compile::CompiledScene;
 
-    /// Parses and validates a scene's kernel with naga (what wgpu does before any driver sees
-    /// it), so a generator mistake fails here, with or without a GPU.
-    fn validate(cfg: &SceneCfg) -> String {
-        let scene = CompiledScene::new(&resolve(cfg)).expect("scene compiles");
-        let src = kernel_source(&scene, &SimCfg::default(), 64);
+    /// Parses and validates a scene's kernel in `form` with naga (what wgpu does before any
+    /// driver sees it), so a generator mistake fails here, with or without a GPU.
+    fn validate_form(scene: &CompiledScene, form: KernelForm) -> String {
+        let src = kernel_source(scene, &SimCfg::default(), 64, form);
         let module = naga::front::wgsl::parse_str(&src)
-            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+            .unwrap_or_else(|e| panic!("{form:?}: {}", e.emit_to_string(&src)));
         naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::default(),
         )
         .validate(&module)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        .unwrap_or_else(|e| panic!("{form:?}: {}", e.emit_to_string(&src)));
         src
+    }
+
+    /// Validates a scene's kernel in both forms; returns the one of the scene's own form.
+    fn validate(cfg: &SceneCfg) -> String {
+        let scene = CompiledScene::new(&resolve(cfg)).expect("scene compiles");
+        let other = match KernelForm::for_scene(&scene) {
+            KernelForm::StraightLine => KernelForm::Looped,
+            KernelForm::Looped => KernelForm::StraightLine,
+        };
+        validate_form(&scene, other);
+        validate_form(&scene, KernelForm::for_scene(&scene))
     }
 
     #[test]
@@ -241,7 +301,7 @@ mod tests {
             std::fs::write(path, &src).expect("write the kernel");
         }
         // The articulation is straight-line code: no link table is indexed at run time.
-        assert!(!src.contains("L_PARENT") && src.contains("lpos[7]"));
+        assert!(!src.contains("link_parent") && src.contains("lpos[7]"));
     }
 
     /// A floating base compiles to six root dofs ahead of its joints' and a kernel that
@@ -280,8 +340,11 @@ mod tests {
         let scene = orbit_assets::load_scene(&file, &[]).expect("the humanoid scene resolves");
         let compiled = CompiledScene::new(&scene).expect("scene compiles");
         assert_eq!(compiled.articulations[0].dofs, 27);
-        let src = kernel_source(&compiled, &SimCfg::default(), 64);
-        naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        assert_eq!(KernelForm::for_scene(&compiled), KernelForm::Looped);
+        let looped = validate_form(&compiled, KernelForm::Looped);
+        let straight = validate_form(&compiled, KernelForm::StraightLine);
+        // The looped form is the shorter kernel.
+        assert!(looped.lines().count() < straight.lines().count() / 2);
     }
 
     #[test]

@@ -22,7 +22,7 @@ impl Gen<'_> {
     }
 
     /// `(articulation dofs, links, local link index)` of every link, for buffer addresses.
-    fn link_strides(&self) -> Vec<(usize, usize, usize)> {
+    pub(super) fn link_strides(&self) -> Vec<(usize, usize, usize)> {
         let mut out = Vec::new();
         for b in &self.scene.articulations {
             out.extend((0..b.links).map(|i| (b.joint_dofs(), b.links, i)));
@@ -92,19 +92,7 @@ impl Gen<'_> {
                 self.line(format!("in_vt[{d}] = inp[inp_addr(1u, {d}u, {st}u)];"));
             }
         }
-        for (o, obj) in s.objects.iter().enumerate() {
-            let shift = self.minus_shift();
-            self.line(format!("opos[{o}] = ld3(obj_addr(0u, {o}u)){shift};"));
-            self.line(format!("orot[{o}] = normalize(ld4(obj_addr(1u, {o}u)));"));
-            self.line(format!("oang[{o}] = ld3(obj_addr(3u, {o}u));"));
-            self.line(
-                "// The state holds the origin's velocity; dynamics use the centre of mass's.",
-            );
-            self.line(format!(
-                "ovel[{o}] = ld3(obj_addr(2u, {o}u)) + cross(oang[{o}], qrot(orot[{o}], {}));",
-                v3(obj.com)
-            ));
-        }
+        self.load_object_lines();
         self.close();
 
         self.open("fn load_applied()");
@@ -132,7 +120,31 @@ impl Gen<'_> {
             ));
             self.line(format!("st3({}, vw[{l}]);", a(3)));
         }
-        for (o, obj) in s.objects.iter().enumerate() {
+        self.publish_object_lines();
+        self.close();
+        self.line("");
+    }
+
+    /// The free objects' part of `load_state`: their state into the kernel's frame.
+    pub(super) fn load_object_lines(&mut self) {
+        for (o, obj) in self.scene.objects.iter().enumerate() {
+            let shift = self.minus_shift();
+            self.line(format!("opos[{o}] = ld3(obj_addr(0u, {o}u)){shift};"));
+            self.line(format!("orot[{o}] = normalize(ld4(obj_addr(1u, {o}u)));"));
+            self.line(format!("oang[{o}] = ld3(obj_addr(3u, {o}u));"));
+            self.line(
+                "// The state holds the origin's velocity; dynamics use the centre of mass's.",
+            );
+            self.line(format!(
+                "ovel[{o}] = ld3(obj_addr(2u, {o}u)) + cross(oang[{o}], qrot(orot[{o}], {}));",
+                v3(obj.com)
+            ));
+        }
+    }
+
+    /// The free objects' part of `publish`: their state back in the env frame.
+    pub(super) fn publish_object_lines(&mut self) {
+        for (o, obj) in self.scene.objects.iter().enumerate() {
             let shift = self.plus_shift();
             self.line(format!("st3(obj_addr(0u, {o}u), opos[{o}]{shift});"));
             self.line(format!("st4(obj_addr(1u, {o}u), orot[{o}]);"));
@@ -142,7 +154,5 @@ impl Gen<'_> {
             ));
             self.line(format!("st3(obj_addr(3u, {o}u), oang[{o}]);"));
         }
-        self.close();
-        self.line("");
     }
 }
