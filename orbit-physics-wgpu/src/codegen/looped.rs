@@ -137,24 +137,13 @@ impl Gen<'_> {
     fn dof_tables(&mut self) {
         let s = self.scene;
         let nd = s.dofs.len();
-        let link_of = |d: usize| {
-            s.links
-                .iter()
-                .position(|link| {
-                    link.dof == Some(d)
-                        || link
-                            .free_root
-                            .is_some_and(|r| (r.dof0..r.dof0 + 6).contains(&d))
-                })
-                .expect("every dof has its link")
-        };
         let col = |g: &dyn Fn(usize) -> String| (0..nd).map(g).collect::<Vec<_>>();
         let dofs = &s.dofs;
         self.line(
             "// The scene's dofs: link, root axis (-1 for a joint), the articulation's joint",
         );
         self.line("// dofs (the state buffer's stride), drive, damping, armature and limits.");
-        let link = col(&|d| format!("{}u", link_of(d)));
+        let link = col(&|d| format!("{}u", self.dof_link(d)));
         self.table("dof_link", "u32", "ND1", link, "0u");
         let axis = col(&|d| dofs[d].root_axis.map_or(-1, |a| a as i32).to_string());
         self.table("dof_axis", "i32", "ND1", axis, "-1");

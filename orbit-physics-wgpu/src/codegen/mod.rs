@@ -191,26 +191,34 @@ impl Gen<'_> {
     /// joint's from `kinematics`; a floating root's a unit translation of its centre of mass
     /// or a unit rotation about it, along an env axis.
     fn motion(&self, d: usize) -> (String, String) {
+        let l = self.dof_link(d);
         let Some(axis) = self.scene.dofs[d].root_axis else {
-            let l = self
-                .scene
-                .links
-                .iter()
-                .position(|link| link.dof == Some(d))
-                .expect("a joint dof has its link");
             return (format!("sw[{l}]"), format!("su[{l}]"));
         };
         let e = v3(Vec3::AXES[axis % 3]);
         if axis < 3 {
             ("vec3<f32>(0.0)".into(), e)
         } else {
-            let (_, root) = self
-                .scene
-                .free_roots()
-                .find(|(_, r)| (r.dof0..r.dof0 + 6).contains(&d))
-                .expect("a root dof has its root");
+            let root = self.scene.links[l]
+                .free_root
+                .expect("a root dof's link is a floating root");
             (e.clone(), format!("cross(fcom[{}], {e})", root.index))
         }
+    }
+
+    /// The link that dof `d` moves: its joint's child link, or the floating root whose six
+    /// dofs it is one of.
+    fn dof_link(&self, d: usize) -> usize {
+        self.scene
+            .links
+            .iter()
+            .position(|link| {
+                link.dof == Some(d)
+                    || link
+                        .free_root
+                        .is_some_and(|r| (r.dof0..r.dof0 + 6).contains(&d))
+            })
+            .expect("every dof has its link")
     }
 
     /// A floating root's six velocity dofs as the WGSL vectors (centre-of-mass velocity,
