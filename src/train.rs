@@ -468,7 +468,10 @@ fn start_runner(
             dir.display()
         );
     }
+    let learner_start = std::time::Instant::now();
     let mut runner = OnPolicyRunner::new(vec_env, cfg, dir.map(Path::to_path_buf), device)?;
+    let seconds = learner_start.elapsed().as_secs_f64();
+    tracing::info!(seconds, "created the run's learner");
     if let Some(base) = resume_from {
         if dir.is_some() {
             println!("resuming from {}", base.display());

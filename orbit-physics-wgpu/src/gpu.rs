@@ -60,6 +60,7 @@ impl Gpu {
             wgpu::ErrorFilter::Internal,
         ]
         .map(|filter| self.device.push_error_scope(filter));
+        let start = std::time::Instant::now();
         let mut runtime_checks = wgpu::ShaderRuntimeChecks::checked();
         if checks == KernelChecks::Trusted {
             runtime_checks.bounds_checks = false;
@@ -91,6 +92,11 @@ impl Gpu {
                 return Err(format!("the GPU driver could not build the kernel: {e}"));
             }
         }
+        tracing::info!(
+            seconds = start.elapsed().as_secs_f64(),
+            lines = source.lines().count(),
+            "compiled a physics kernel"
+        );
         cache.insert(key, pipeline.clone());
         Ok(pipeline)
     }

@@ -140,7 +140,11 @@ impl WarmUp {
                 }
             };
         Self(Some(std::thread::spawn(move || {
-            OnPolicyRunner::new(shapes, cfg, None, device)?.learn(1)
+            let start = std::time::Instant::now();
+            OnPolicyRunner::new(shapes, cfg, None, device)?.learn(1)?;
+            let seconds = start.elapsed().as_secs_f64();
+            tracing::info!(seconds, "the learner's warm-up compiled its kernels");
+            Ok(())
         })))
     }
 
