@@ -49,7 +49,7 @@ impl Mlp {
     /// become many partial sums added afterwards.
     pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
         let [n, d] = x.dims();
-        let chunks = row_chunks(n);
+        let chunks = row_chunks(n, min_chunk_rows(&x.device()));
         if chunks == 1 {
             return self.forward_rows(x);
         }
@@ -110,21 +110,31 @@ fn chunked_linear(layer: &Linear, x: Tensor<3>) -> Tensor<3> {
     }
 }
 
-/// The number of equal chunks (a power of two, at most 256, each of at least 1 024 rows) a
-/// batch of `n` rows is split into. A layer's weight gradient is `xᵀ g`: a small
+/// The number of equal chunks (a power of two, at most 256, each of at least `min_rows` rows)
+/// a batch of `n` rows is split into. A layer's weight gradient is `xᵀ g`: a small
 /// `d_in × d_out` product over all `n` rows, which a GPU matmul kernel tiles over its output
 /// only, so a few workgroups do all the work. As a batched product each chunk gets its own
 /// workgroups and the partial gradients are summed afterwards ("split-K"); at 65 536 envs this
 /// halves the update on an H100. The bias gradients are split the same way
 /// ([`chunked_linear`]; docs/benchmarks.md).
-fn row_chunks(n: usize) -> usize {
+fn row_chunks(n: usize, min_rows: usize) -> usize {
     const MAX_CHUNKS: usize = 256;
-    const MIN_ROWS: usize = 1024;
     let mut c = 1;
-    while c < MAX_CHUNKS && n.is_multiple_of(2 * c) && n / (2 * c) >= MIN_ROWS {
+    while c < MAX_CHUNKS && n.is_multiple_of(2 * c) && n / (2 * c) >= min_rows {
         c *= 2;
     }
     c
+}
+
+/// The fewest rows of a chunk on `device`: 256 on a GPU, where below 512 rows cubecl's fixed
+/// product kernels unroll half as much work per thread, so the learner compiles them seconds
+/// sooner and updates as fast (docs/experiments/learner-compile-chain.md); 1 024 on the CPU.
+fn min_chunk_rows(device: &Device) -> usize {
+    if device.clone().inner() == Device::flex() {
+        1024
+    } else {
+        256
+    }
 }
 
 /// SELU's constants (Klambauer et al. 2017, as in PyTorch).
@@ -311,15 +321,31 @@ mod tests {
         }
     }
 
-    /// Chunk counts: powers of two, at most 256, chunks of at least 1 024 rows.
+    /// Chunk counts: powers of two, at most 256, chunks of at least `min_rows` rows.
     #[test]
     fn row_chunks_split_large_batches_only() {
-        assert_eq!(row_chunks(393_216), 256);
-        assert_eq!(row_chunks(24_576), 16);
-        assert_eq!(row_chunks(4_096), 4);
-        assert_eq!(row_chunks(1_536), 1);
-        assert_eq!(row_chunks(3_000), 2);
-        assert_eq!(row_chunks(1_001), 1);
+        // (rows, fewest rows per chunk, chunks)
+        let cases = [
+            (393_216, 1024, 256),
+            (24_576, 1024, 16),
+            (4_096, 1024, 4),
+            (1_536, 1024, 1),
+            (3_000, 1024, 2),
+            (1_001, 1024, 1),
+            (393_216, 256, 256),
+            (32_768, 256, 128),
+            (4_096, 256, 16),
+            (1_536, 256, 4),
+            (511, 256, 1),
+            (512, 256, 2),
+        ];
+        for (n, min_rows, chunks) in cases {
+            assert_eq!(
+                row_chunks(n, min_rows),
+                chunks,
+                "{n} rows, {min_rows} per chunk"
+            );
+        }
     }
 
     /// The largest `|a[i] − b[i]|`.
@@ -341,7 +367,7 @@ mod tests {
         let n = 4096;
         let data: Vec<f32> = (0..n * 5).map(|_| rng.uniform_range(-2.0, 2.0)).collect();
         let x = Tensor::<2>::from_data(TensorData::new(data, [n, 5]), &device);
-        assert_eq!(row_chunks(n), 4);
+        assert_eq!(row_chunks(n, min_chunk_rows(&device)), 4);
         let chunked = mlp.forward(x.clone());
         let plain = mlp.forward_rows(x);
         let a: Vec<f32> = chunked.clone().into_data().try_into_vec().unwrap();
