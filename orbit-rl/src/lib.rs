@@ -42,6 +42,11 @@ pub fn share_wgpu_device(device: orbit_mlp_wgpu::wgpu::Device, queue: orbit_mlp_
     orbit_mlp_wgpu::share_device(device, queue);
 }
 
+/// Whether `device` is the CPU learner's (burn's flex backend), with or without autodiff.
+pub(crate) fn on_cpu(device: &burn::tensor::Device) -> bool {
+    device.clone().inner() == burn::tensor::Device::flex()
+}
+
 /// Random streams of the learner (`EnvRng` stream ids; the env's own are 1–6 and 19, in
 /// `orbit_core::rng::streams`).
 pub mod streams {

@@ -130,11 +130,7 @@ fn row_chunks(n: usize, min_rows: usize) -> usize {
 /// product kernels unroll half as much work per thread, so the learner compiles them seconds
 /// sooner and updates as fast (docs/experiments/learner-compile-chain.md); 1 024 on the CPU.
 fn min_chunk_rows(device: &Device) -> usize {
-    if device.clone().inner() == Device::flex() {
-        1024
-    } else {
-        256
-    }
+    if crate::on_cpu(device) { 1024 } else { 256 }
 }
 
 /// SELU's constants (Klambauer et al. 2017, as in PyTorch).
@@ -147,7 +143,7 @@ const SELU_SCALE: f64 = 1.050_700_987_355_480_5;
 /// zero gradient by it: NaN weights once a pre-activation passes 88. Both forms below keep the
 /// exponent at or below 0 and give the same values.
 fn elu<const D: usize>(x: Tensor<D>, scale: f64, alpha: f64) -> Tensor<D> {
-    if x.device().inner() == Device::flex() {
+    if crate::on_cpu(&x.device()) {
         elu_by_mask(x, scale, alpha)
     } else {
         elu_by_clamps(x, scale, alpha)

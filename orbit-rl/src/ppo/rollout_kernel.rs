@@ -31,7 +31,7 @@ impl RolloutKernel {
         stacked: &StackedActorCritic,
         rows: usize,
     ) -> Result<Option<Self>, RlError> {
-        if rows > MAX_ROWS || device.clone().inner() == Device::flex() {
+        if rows > MAX_ROWS || crate::on_cpu(device) {
             return Ok(None);
         }
         let Some((wgpu_device, queue)) = orbit_mlp_wgpu::shared_device() else {
