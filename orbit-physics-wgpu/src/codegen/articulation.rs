@@ -12,6 +12,20 @@ use crate::compile::FreeRoot;
 /// fastest kernel); beyond, by loops over the tree of dofs.
 const UNROLLED_DOFS: usize = 16;
 
+/// How the kernel factorises the system matrix A.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Factorisation {
+    /// Unrolled Cholesky A = L Lᵀ of each articulation's dense block: serial chains, whose
+    /// matrix has no structural zeros.
+    Dense,
+    /// Unrolled A = Lᵀ D L along a branching tree of dofs: with the dofs ordered root first,
+    /// a dense factorisation would fill in the zeros between branches (the Ant's legs), and
+    /// along the tree it fills in nothing.
+    UnrolledTree,
+    /// The same along the tree, as loops: beyond [`UNROLLED_DOFS`] dofs.
+    Looped,
+}
+
 impl Gen<'_> {
     /// Forward kinematics, joint motion subspaces, link velocities and spatial inertias.
     pub(super) fn kinematics(&mut self) {
@@ -232,9 +246,9 @@ impl Gen<'_> {
             }
         }
         // Dofs of one articulation off each other's chain: structural zeros of the dense
-        // Cholesky block. Entries across articulations, and for the tree factorisation any
+        // Cholesky block. Entries across articulations, and for the tree factorisations any
         // entry off a chain, are never read.
-        let dense = nd <= UNROLLED_DOFS;
+        let dense = self.factorisation() == Factorisation::Dense;
         for i in (0..nd).filter(|_| dense) {
             let (d0, _) = self.dof_block(i);
             for j in d0..i {
@@ -257,13 +271,33 @@ impl Gen<'_> {
         self.line("");
     }
 
-    /// In-place factorisation of the system matrix and the solve A x = b with it: for up to
-    /// [`UNROLLED_DOFS`] dofs, a Cholesky factorisation A = L Lᵀ of each articulation's dense
-    /// block as straight-line code; beyond, loops over the dofs' tree (A = Lᵀ D L).
-    pub(super) fn cholesky(&mut self) {
+    /// How the system matrix is factorised: see [`Factorisation`].
+    fn factorisation(&self) -> Factorisation {
         if self.nd() > UNROLLED_DOFS {
-            return self.tree_factorisation();
+            return Factorisation::Looped;
         }
+        let parents = self.dof_parents();
+        let chains = (0..self.nd()).all(|d| parents[d] < 0 || parents[d] as usize == d - 1);
+        if chains {
+            Factorisation::Dense
+        } else {
+            Factorisation::UnrolledTree
+        }
+    }
+
+    /// In-place factorisation of the system matrix and the solve A x = b with it, in the form
+    /// [`Gen::factorisation`] picks.
+    pub(super) fn cholesky(&mut self) {
+        match self.factorisation() {
+            Factorisation::Dense => self.dense_cholesky(),
+            Factorisation::UnrolledTree => self.unrolled_tree_factorisation(),
+            Factorisation::Looped => self.tree_factorisation(),
+        }
+    }
+
+    /// A Cholesky factorisation A = L Lᵀ of each articulation's dense block and its solve as
+    /// straight-line code.
+    fn dense_cholesky(&mut self) {
         let nd = self.nd();
         let at = |i: usize, j: usize| format!("amat[{}]", i * nd + j);
         self.line("// In-place Cholesky factorisation A = L Lᵀ of each articulation's block (lower triangle of amat).");
@@ -303,6 +337,55 @@ impl Gen<'_> {
                 write!(t, " - {} * (*b)[{k}]", at(k, i)).expect("write to string");
             }
             self.line(format!("(*b)[{i}] = ({t}) * linv[{i}];"));
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// Featherstone's factorisation A = Lᵀ D L along the tree of dofs and its solve as
+    /// straight-line code, each dof's entries updated only along its chain of ancestors.
+    fn unrolled_tree_factorisation(&mut self) {
+        let nd = self.nd();
+        let parents = self.dof_parents();
+        let ancestors = |d: usize| {
+            let mut out = vec![];
+            let mut p = parents[d];
+            while p >= 0 {
+                out.push(p as usize);
+                p = parents[p as usize];
+            }
+            out
+        };
+        let at = |i: usize, j: usize| format!("amat[{}]", i * nd + j);
+        self.line("// In-place factorisation A = Lᵀ D L along the tree of dofs (1/D in linv, L below the diagonal).");
+        self.open("fn cholesky()");
+        for k in (0..nd).rev() {
+            self.line(format!("linv[{k}] = 1.0 / max({}, 1e-12);", at(k, k)));
+            for i in ancestors(k) {
+                self.open("");
+                self.line(format!("let a = {} * linv[{k}];", at(k, i)));
+                for j in std::iter::once(i).chain(ancestors(i)) {
+                    self.line(format!("{} -= a * {};", at(i, j), at(k, j)));
+                }
+                self.line(format!("{} = a;", at(k, i)));
+                self.close();
+            }
+        }
+        self.close();
+        self.line("");
+        self.line("// Solves A x = b in place: Lᵀ z = b, then D y = z, then L x = y.");
+        self.open("fn chol_solve(b: ptr<function, array<f32, ND1>>)");
+        for i in (0..nd).rev() {
+            for j in ancestors(i) {
+                self.line(format!("(*b)[{j}] -= {} * (*b)[{i}];", at(i, j)));
+            }
+        }
+        for i in 0..nd {
+            let mut t = format!("(*b)[{i}] * linv[{i}]");
+            for j in ancestors(i) {
+                write!(t, " - {} * (*b)[{j}]", at(i, j)).expect("write to string");
+            }
+            self.line(format!("(*b)[{i}] = {t};"));
         }
         self.close();
         self.line("");

@@ -310,6 +310,8 @@ mod tests {
         }
         // The articulation is straight-line code: no link table is indexed at run time.
         assert!(!src.contains("link_parent") && src.contains("lpos[7]"));
+        // A serial chain: the dense Cholesky factorisation.
+        assert!(src.contains("amat[0] = sqrt(max(amat[0], 1e-12));"));
     }
 
     /// A floating base compiles to six root dofs ahead of its joints' and a kernel that
@@ -332,12 +334,16 @@ mod tests {
         );
         let src = validate(&cfg);
         assert!(src.contains("fcom[0] = fcom[0] + DT * vec3<f32>(qd[0], qd[1], qd[2]);"));
-        validate(&SceneCfg {
+        let ant = validate(&SceneCfg {
             env_spacing: 3.0,
             articulations: vec![orbit_conformance::standing_ant(0.6, &[])],
             rigid_objects: vec![],
             static_objects: vec![orbit_conformance::ground(1.0)],
         });
+        // The Ant's legs branch: its straight-line kernel factorises along the tree (no square
+        // roots), and never writes the entry of two joints on different legs (dofs 8 and 6).
+        assert!(!ant.contains("sqrt(max(amat") && ant.contains("linv[13] = 1.0 / max(amat[195]"));
+        assert!(!ant.contains("amat[118]"));
     }
 
     /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.
