@@ -109,15 +109,6 @@ impl Gen<'_> {
         }
         self.close();
         self.line("");
-        self.line("// J_arm q̇ at the start of the substep of the row at `base`.");
-        self.open("fn arm_dot0(base: u32) -> f32");
-        self.line("var s = 0.0;");
-        self.open("for (var d = 0u; d < ND1; d++)");
-        self.line(format!("s += {} * qd0[d];", rj("base + d")));
-        self.close();
-        self.line("return s;");
-        self.close();
-        self.line("");
     }
 
     /// Where the rows' arm Jacobians and `W = A⁻¹ Jᵀ` live, as WGSL expressions of an index

@@ -115,6 +115,9 @@ fn build_contact(c: u32) {
     let basis = contact_basis(c_n[c]);
     var k = vec3<f32>(0.0);
     var info = 0u;
+    // The arm's part of the rows' start velocities, J_arm q̇₀, taken while each row's Jacobian
+    // is still in registers rather than read back from the rows' storage.
+    var v_arm = vec3<f32>(0.0);
     if ba >= i32(NL) {
         let o = ba - i32(NL);
         k_pa[c] = p - obj_com(o);
@@ -134,16 +137,16 @@ fn build_contact(c: u32) {
         if arm_a || arm_b {
             info |= ROW_ARM;
             k[d] += arm_row(c * 3u + d, jt);
+            var s = 0.0;
+            for (var i = 0u; i < ND1; i++) {
+                s += jt[i] * qd0[i];
+            }
+            v_arm[d] = s;
         }
     }
     k_info[c] = info;
     // Start velocities of the three rows.
-    var v0 = contact_object_vel0(info, k_pa[c], k_pb[c]) * basis;
-    if (info & ROW_ARM) != 0u {
-        for (var d = 0u; d < 3u; d++) {
-            v0[d] += arm_dot0((c * 3u + d) * ND1);
-        }
-    }
+    let v0 = contact_object_vel0(info, k_pa[c], k_pb[c]) * basis + v_arm;
     let n = normal_row(c_sep[c], v0.x, k.x, body_weight(ba) + body_weight(bb));
     // Tangents: R = R_n / IMPRATIO and target v0 (1 − h B) (MuJoCo's elliptic cones); rigid
     // for the soft step and for a speculative contact.
