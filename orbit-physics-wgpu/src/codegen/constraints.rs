@@ -2,6 +2,7 @@
 //! terms, and joint-limit rows.
 
 use std::fmt::Write as _;
+use std::ops::Range;
 
 use super::{Gen, f};
 use crate::compile::{CompiledScene, MAX_CONTACTS};
@@ -77,35 +78,68 @@ impl Gen<'_> {
 
     /// The rows' storage and the arm parts of the rows, unrolled over the dofs in both forms:
     /// the solver's sweeps run them for every row, and unrolled, a row's loads from the
-    /// storage buffer are issued together rather than one after another.
+    /// storage buffer are issued together rather than one after another. Row `r`'s arm
+    /// Jacobian holds the entries from dof [`stored_jacobian`]'s first on (`NJ` floats from
+    /// `r · NJ`), its `W` all `ND1` (from `r · ND1`).
     pub(super) fn arm_rows(&mut self) {
         let nd = self.nd();
+        let (j0, nj) = stored_jacobian(self.scene);
+        self.line(format!("const NJ = {}u;", nj.max(1)));
+        self.root_velocity_of_contacts();
         let (rj, rw) = self.row_storage();
-        let (rj, rw) = (|i: &str| rj.replace('#', i), |i: &str| rw.replace('#', i));
-        self.line("// Stores a row's arm Jacobian and W = A⁻¹ Jᵀ at `base`; returns J W.");
-        self.open("fn arm_store(base: u32, jt: array<f32, ND1>, w: array<f32, ND1>) -> f32");
+        let rj = |k: usize| rj.replace('#', &format!("row * NJ + {k}u"));
+        let rw = |d: usize| rw.replace('#', &format!("row * ND1 + {d}u"));
+        self.line("// Stores row `row`'s arm Jacobian and W = A⁻¹ Jᵀ; returns J W.");
+        self.open("fn arm_store(row: u32, jt: array<f32, ND1>, w: array<f32, ND1>) -> f32");
         let mut jw = String::from("0.0");
         for d in 0..nd {
-            self.line(format!("{} = jt[{d}];", rj(&format!("base + {d}u"))));
-            self.line(format!("{} = w[{d}];", rw(&format!("base + {d}u"))));
+            if d >= j0 {
+                self.line(format!("{} = jt[{d}];", rj(d - j0)));
+            }
+            self.line(format!("{} = w[{d}];", rw(d)));
             write!(jw, " + jt[{d}] * w[{d}]").expect("write to string");
         }
         self.line(format!("return {jw};"));
         self.close();
         self.line("");
-        self.line("// J_arm q̇ of the row at `base`.");
-        self.open("fn arm_dot(base: u32) -> f32");
+        self.line("// J_arm q̇ of row `row`, over the stored entries.");
+        self.open("fn arm_dot(row: u32) -> f32");
         let mut dot = String::from("0.0");
-        for d in 0..nd {
-            write!(dot, " + {} * qd[{d}]", rj(&format!("base + {d}u"))).expect("write to string");
+        for d in j0..nd {
+            write!(dot, " + {} * qd[{d}]", rj(d - j0)).expect("write to string");
         }
         self.line(format!("return {dot};"));
         self.close();
         self.line("");
-        self.line("// q̇ += W x for the row at `base`.");
-        self.open("fn arm_axpy(base: u32, x: f32)");
+        self.line("// q̇ += W x for row `row`.");
+        self.open("fn arm_axpy(row: u32, x: f32)");
         for d in 0..nd {
-            self.line(format!("qd[{d}] += {} * x;", rw(&format!("base + {d}u"))));
+            self.line(format!("qd[{d}] += {} * x;", rw(d)));
+        }
+        self.close();
+        self.line("");
+    }
+
+    /// `contact_root_vel(c, info)`: the floating root's part of contact c's relative velocity,
+    /// `f (v + ω × (p − c))` for the root's centre-of-mass velocity v, angular velocity ω and
+    /// centre of mass c, with f = 1 for a contact on its links on side a, −1 on side b, 0 on
+    /// both or neither (`ROOT_LINKS`, bits 24–25 of the contact's info). These are the root
+    /// dofs' entries of the contact's rows times q̇, which the rows then need not store.
+    fn root_velocity_of_contacts(&mut self) {
+        let links = computed_root_links(self.scene);
+        let (l0, l1) = links.clone().map_or((0, 0), |r| (r.start, r.end));
+        self.line(format!("const ROOT_LINKS = vec2<i32>({l0}, {l1});"));
+        self.line(
+            "// The floating root's part of contact c's relative velocity (side a minus side b).",
+        );
+        self.open("fn contact_root_vel(c: u32, info: u32) -> vec3<f32>");
+        if links.is_none() {
+            self.line("// No floating root whose entries the rows leave out.");
+            self.line("return vec3<f32>(0.0);");
+        } else {
+            self.line("let f = f32(i32((info >> 24u) & 3u) - 1);");
+            self.line("let w = vec3<f32>(qd[3], qd[4], qd[5]);");
+            self.line("return f * (vec3<f32>(qd[0], qd[1], qd[2]) + cross(w, c_p[c] - fcom[0]));");
         }
         self.close();
         self.line("");
@@ -115,7 +149,7 @@ impl Gen<'_> {
     /// `#`: private arrays, or beyond [`PRIVATE_ROW_DOFS`] dofs the `rows` storage buffer.
     fn row_storage(&mut self) -> (String, String) {
         if row_storage_floats(self.scene, 1).is_none() {
-            self.line("var<private> r_j: array<f32, RMAX * ND1>;");
+            self.line("var<private> r_j: array<f32, RMAX * NJ>;");
             self.line("var<private> r_w: array<f32, RMAX * ND1>;");
             return ("r_j[#]".into(), "r_w[#]".into());
         }
@@ -123,7 +157,7 @@ impl Gen<'_> {
         self.line("@group(0) @binding(6) var<storage, read_write> rows: array<f32>;");
         (
             "rows[(#) * num_envs + env]".into(),
-            "rows[(RMAX * ND1 + #) * num_envs + env]".into(),
+            "rows[(RMAX * NJ + #) * num_envs + env]".into(),
         )
     }
 
@@ -217,13 +251,39 @@ impl Gen<'_> {
 }
 
 /// Beyond this many dofs the rows' arm Jacobians and `W = A⁻¹ Jᵀ` live in a storage buffer:
-/// in private memory they are `2 (3 C + n) n` floats a thread, more than NVIDIA's driver builds
-/// a kernel with at the Humanoid's 27 dofs (docs/experiments/large-kernels.md).
+/// in private memory they are about `2 (3 C + n) n` floats a thread, more than NVIDIA's driver
+/// builds a kernel with at the Humanoid's 27 dofs (docs/experiments/large-kernels.md).
 const PRIVATE_ROW_DOFS: usize = 16;
 
 /// Floats of the `rows` storage buffer for `num_envs` envs, or `None` where the rows live in
 /// private memory.
 pub fn row_storage_floats(scene: &CompiledScene, num_envs: usize) -> Option<usize> {
     let nd = scene.dofs.len();
-    (nd > PRIVATE_ROW_DOFS).then(|| 2 * (3 * MAX_CONTACTS + nd) * nd * num_envs)
+    let (_, nj) = stored_jacobian(scene);
+    (nd > PRIVATE_ROW_DOFS).then(|| (3 * MAX_CONTACTS + nd) * (nj.max(1) + nd) * num_envs)
+}
+
+/// The links of the floating root whose Jacobian entries the rows leave out, computing them
+/// from the contact's point instead (`contact_root_vel`): the scene's only floating root, when
+/// its six dofs are the first. In the sweeps, which are bound by the rows' bytes at many envs,
+/// that is 6 of every row's `2 n` floats.
+fn computed_root_links(scene: &CompiledScene) -> Option<Range<usize>> {
+    let mut roots = scene.free_roots();
+    let (_, root) = roots.next()?;
+    if roots.next().is_some() || root.dof0 != 0 {
+        return None;
+    }
+    let block = scene.articulations.iter().find(|b| b.dof0 == 0)?;
+    Some(block.link0..block.link0 + block.links)
+}
+
+/// The first dof whose entry the rows' arm Jacobians store, and how many they store.
+fn stored_jacobian(scene: &CompiledScene) -> (usize, usize) {
+    let nd = scene.dofs.len();
+    let j0 = if computed_root_links(scene).is_some() {
+        6
+    } else {
+        0
+    };
+    (j0, nd - j0)
 }

@@ -273,7 +273,7 @@ mod tests {
     use orbit_core::physics::SimCfg;
     use orbit_core::scene::{RootStateCfg, SceneCfg};
 
-    use super::{KernelForm, kernel_source};
+    use super::{KernelForm, kernel_source, row_storage_floats};
     use crate::compile::CompiledScene;
 
     /// Parses and validates a scene's kernel in `form` with naga (what wgpu does before any
@@ -312,6 +312,8 @@ mod tests {
         assert!(!src.contains("link_parent") && src.contains("lpos[7]"));
         // A serial chain: the dense Cholesky factorisation.
         assert!(src.contains("amat[0] = sqrt(max(amat[0], 1e-12));"));
+        // No floating root: the rows store every entry.
+        assert!(src.contains("const NJ = 7u;") && src.contains("return vec3<f32>(0.0);"));
     }
 
     /// A floating base compiles to six root dofs ahead of its joints' and a kernel that
@@ -344,6 +346,8 @@ mod tests {
         // roots), and never writes the entry of two joints on different legs (dofs 8 and 6).
         assert!(!ant.contains("sqrt(max(amat") && ant.contains("linv[13] = 1.0 / max(amat[195]"));
         assert!(!ant.contains("amat[118]"));
+        // Its rows leave out the floating root's six entries of each Jacobian: 8 of 14 stored.
+        assert!(ant.contains("const NJ = 8u;") && ant.contains("cross(w, c_p[c] - fcom[0])"));
     }
 
     /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.
@@ -355,6 +359,12 @@ mod tests {
         let compiled = CompiledScene::new(&scene).expect("scene compiles");
         assert_eq!(compiled.articulations[0].dofs, 27);
         assert_eq!(KernelForm::for_scene(&compiled), KernelForm::Looped);
+        // Per env: 3 · 12 contact rows and 27 limit rows, of 21 stored Jacobian entries (the
+        // floating root's six left out) and 27 of W.
+        assert_eq!(
+            row_storage_floats(&compiled, 1),
+            Some((3 * 12 + 27) * (21 + 27))
+        );
         let looped = validate_form(&compiled, KernelForm::Looped);
         let straight = validate_form(&compiled, KernelForm::StraightLine);
         // The looped form is the shorter kernel.

@@ -24,7 +24,7 @@ fn object_k(o: i32, p: vec3<f32>, basis: mat3x3<f32>) -> vec3<f32> {
 fn arm_row(row: u32, jt: array<f32, ND1>) -> f32 {
     var w = jt;
     chol_solve(&w);
-    return arm_store(row * ND1, jt, w);
+    return arm_store(row, jt, w);
 }
 
 // MuJoCo's impedance d(pos) of a penetration pos < 0 (solimp: IMP0 at contact, IMP1 from
@@ -107,6 +107,11 @@ fn body_weight(b: i32) -> f32 {
     return body_invw[b];
 }
 
+// 1 if body b is a link of the floating root whose entries the rows leave out, else 0.
+fn on_root_links(b: i32) -> i32 {
+    return i32((b >= ROOT_LINKS.x) && (b < ROOT_LINKS.y));
+}
+
 // Contact c between bodies ba and bb (body code: -1 static, link, NL + object).
 fn build_contact(c: u32) {
     let ba = c_ba[c];
@@ -144,6 +149,8 @@ fn build_contact(c: u32) {
             v_arm[d] = s;
         }
     }
+    // The floating root's entries of the rows, left out of their storage: its factor plus one.
+    info |= u32(on_root_links(ba) - on_root_links(bb) + 1) << 24u;
     k_info[c] = info;
     // Start velocities of the three rows.
     let v0 = contact_object_vel0(info, k_pa[c], k_pb[c]) * basis + v_arm;
@@ -270,7 +277,7 @@ fn warm_start() {
         contact_object_push(c, info, contact_basis(c_n[c]) * lam);
         if (info & ROW_ARM) != 0u {
             for (var d = 0u; d < 3u; d++) {
-                arm_axpy((c * 3u + d) * ND1, lam[d]);
+                arm_axpy(c * 3u + d, lam[d]);
             }
         }
     }
@@ -280,7 +287,7 @@ fn warm_start() {
             continue;
         }
         l_lam[l] = warm[warm_addr(k, 1u)];
-        arm_axpy((3u * MAX_C + l) * ND1, l_lam[l]);
+        arm_axpy(3u * MAX_C + l, l_lam[l]);
     }
 }
 
@@ -316,10 +323,10 @@ fn solve_contact(c: u32) {
     let info = k_info[c];
     let arm = (info & ROW_ARM) != 0u;
     let basis = contact_basis(c_n[c]);
-    let row = c * 3u * ND1;
+    let row = c * 3u;
     let meff = k_meff[c];
     let lam = k_lam[c];
-    var jn = dot(contact_object_vel(c, info), basis[0]);
+    var jn = dot(contact_object_vel(c, info) + contact_root_vel(c, info), basis[0]);
     if arm {
         jn += arm_dot(row);
     }
@@ -335,10 +342,10 @@ fn solve_contact(c: u32) {
     let lim = c_mu[c] * ln;
     var lt = vec2<f32>(0.0);
     if lim > 0.0 {
-        let v = contact_object_vel(c, info);
+        let v = contact_object_vel(c, info) + contact_root_vel(c, info);
         var jt = vec2<f32>(dot(v, basis[1]), dot(v, basis[2]));
         if arm {
-            jt += vec2<f32>(arm_dot(row + ND1), arm_dot(row + 2u * ND1));
+            jt += vec2<f32>(arm_dot(row + 1u), arm_dot(row + 2u));
         }
         lt = lam.yz - RELAXATION * meff.yz * (jt - tgt.yz + friction_r(r) * lam.yz);
         let mag = length(lt);
@@ -351,8 +358,8 @@ fn solve_contact(c: u32) {
     if slip {
         contact_object_push(c, info, basis[1] * dt.x + basis[2] * dt.y);
         if arm {
-            arm_axpy(row + ND1, dt.x);
-            arm_axpy(row + 2u * ND1, dt.y);
+            arm_axpy(row + 1u, dt.x);
+            arm_axpy(row + 2u, dt.y);
         }
     }
     if slip || ln != lam.x {
@@ -369,7 +376,7 @@ fn solve(sweeps: u32) {
             solve_contact(c);
         }
         for (var l = 0u; l < nlim; l++) {
-            let row = (3u * MAX_C + l) * ND1;
+            let row = 3u * MAX_C + l;
             let lam = l_lam[l];
             let nl = normal_impulse(lam, arm_dot(row), l_tgt[l], l_r[l], l_meff[l]);
             if nl != lam {

@@ -100,8 +100,9 @@ var<private> c_slot: array<u32, MAX_C>;
 // levers and effective masses are stored, not per-row object Jacobians: the solver is bound by
 // the traffic of this storage (it lives in local memory, and 65 536 envs' worth does not fit in
 // L2), so it recomputes the tangents and the object terms instead. `k_info` holds whether a
-// contact has an arm part (ROW_ARM) and its two sides' free objects plus one (bits 8–15 and
-// 16–23, 0 for none). A penetrating contact or limit is a soft row of the configured contact
+// contact has an arm part (ROW_ARM), its two sides' free objects plus one (bits 8–15 and
+// 16–23, 0 for none) and the factor of the floating root's part plus one (bits 24–25; see
+// `contact_root_vel`). A penetrating contact or limit is a soft row of the configured contact
 // model (its rows' target velocities `k_tgt` and the normal row's regulariser `k_r`; see
 // `normal_row`), a gap a rigid speculative row.
 var<private> k_info: array<u32, MAX_C>;
@@ -118,7 +119,8 @@ var<private> l_r: array<f32, ND1>;
 var<private> l_lam: array<f32, ND1>;
 var<private> l_slot: array<u32, ND1>;
 // Arm rows: J_arm and W of contact c's direction d at row 3c + d, of limit l at row 3 MAX_C + l
-// (ND1 floats each), in `r_j` and `r_w` or in the `rows` buffer (generated with their accessors).
+// (J_arm's NJ stored entries, W's ND1), in `r_j` and `r_w` or in the `rows` buffer (generated
+// with their accessors).
 
 const ROW_ARM: u32 = 4u;
 // Velocities at the start of the substep: MuJoCo's reference acceleration
