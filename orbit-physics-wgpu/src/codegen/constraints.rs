@@ -273,7 +273,10 @@ fn computed_root_links(scene: &CompiledScene) -> Option<Range<usize>> {
     if roots.next().is_some() || root.dof0 != 0 {
         return None;
     }
-    let block = scene.articulations.iter().find(|b| b.dof0 == 0)?;
+    let block = scene
+        .articulations
+        .iter()
+        .find(|b| b.floating && b.dof0 == 0)?;
     Some(block.link0..block.link0 + block.links)
 }
 
