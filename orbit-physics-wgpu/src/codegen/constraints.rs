@@ -84,7 +84,7 @@ impl Gen<'_> {
     pub(super) fn arm_rows(&mut self) {
         let nd = self.nd();
         let (j0, nj) = stored_jacobian(self.scene);
-        self.line(format!("const NJ = {}u;", nj.max(1)));
+        self.line(format!("const NJ = {nj}u;"));
         self.root_velocity_of_contacts();
         let (rj, rw) = self.row_storage();
         let rj = |k: usize| rj.replace('#', &format!("row * NJ + {k}u"));
@@ -260,7 +260,7 @@ const PRIVATE_ROW_DOFS: usize = 16;
 pub fn row_storage_floats(scene: &CompiledScene, num_envs: usize) -> Option<usize> {
     let nd = scene.dofs.len();
     let (_, nj) = stored_jacobian(scene);
-    (nd > PRIVATE_ROW_DOFS).then(|| (3 * MAX_CONTACTS + nd) * (nj.max(1) + nd) * num_envs)
+    (nd > PRIVATE_ROW_DOFS).then(|| (3 * MAX_CONTACTS + nd) * (nj + nd) * num_envs)
 }
 
 /// The links of the floating root whose Jacobian entries the rows leave out, computing them
@@ -280,7 +280,9 @@ fn computed_root_links(scene: &CompiledScene) -> Option<Range<usize>> {
     Some(block.link0..block.link0 + block.links)
 }
 
-/// The first dof whose entry the rows' arm Jacobians store, and how many they store.
+/// The first dof whose entry the rows' arm Jacobians store, and the floats they hold per row
+/// (`NJ`): the stored entries, at least one, so that a floating body without joints still
+/// declares its array.
 fn stored_jacobian(scene: &CompiledScene) -> (usize, usize) {
     let nd = scene.dofs.len();
     let j0 = if computed_root_links(scene).is_some() {
@@ -288,5 +290,5 @@ fn stored_jacobian(scene: &CompiledScene) -> (usize, usize) {
     } else {
         0
     };
-    (j0, nd - j0)
+    (j0, (nd - j0).max(1))
 }
