@@ -4,6 +4,7 @@
 use std::fmt::Write as _;
 use std::ops::Range;
 
+use super::row_windows::{JacobianWindows, window_dot};
 use super::{Gen, f};
 use crate::compile::{CompiledScene, MAX_CONTACTS};
 
@@ -80,20 +81,30 @@ impl Gen<'_> {
     /// the solver's sweeps run them for every row, and unrolled, a row's loads from the
     /// storage buffer are issued together rather than one after another. Row `r`'s arm
     /// Jacobian holds the entries from dof [`stored_jacobian`]'s first on (`NJ` floats from
-    /// `r · NJ`), its `W` all `ND1` (from `r · ND1`).
+    /// `r · NJ`), or with Jacobian windows (`row_windows`) the first of them, its branch
+    /// `br`'s window; its `W` all `ND1` (from `r · ND1`).
     pub(super) fn arm_rows(&mut self) {
         let nd = self.nd();
         let (j0, nj) = stored_jacobian(self.scene);
         self.line(format!("const NJ = {nj}u;"));
         self.root_velocity_of_contacts();
+        let windows = JacobianWindows::of(self.scene, j0, nj);
+        self.row_branches(windows.as_ref());
         let (rj, rw) = self.row_storage();
         let rj = |k: usize| rj.replace('#', &format!("row * NJ + {k}u"));
         let rw = |d: usize| rw.replace('#', &format!("row * ND1 + {d}u"));
-        self.line("// Stores row `row`'s arm Jacobian and W = A⁻¹ Jᵀ; returns J W.");
-        self.open("fn arm_store(row: u32, jt: array<f32, ND1>, w: array<f32, ND1>) -> f32");
+        self.line(
+            "// Stores row `row`'s arm Jacobian (for branch `br`) and W = A⁻¹ Jᵀ; returns J W.",
+        );
+        self.open(
+            "fn arm_store(row: u32, jt: array<f32, ND1>, w: array<f32, ND1>, br: u32) -> f32",
+        );
+        if let Some(win) = &windows {
+            self.window_store(win, &rj);
+        }
         let mut jw = String::from("0.0");
         for d in 0..nd {
-            if d >= j0 {
+            if d >= j0 && windows.is_none() {
                 self.line(format!("{} = jt[{d}];", rj(d - j0)));
             }
             self.line(format!("{} = w[{d}];", rw(d)));
@@ -102,12 +113,18 @@ impl Gen<'_> {
         self.line(format!("return {jw};"));
         self.close();
         self.line("");
-        self.line("// J_arm q̇ of row `row`, over the stored entries.");
-        self.open("fn arm_dot(row: u32) -> f32");
-        let mut dot = String::from("0.0");
-        for d in j0..nd {
-            write!(dot, " + {} * qd[{d}]", rj(d - j0)).expect("write to string");
-        }
+        self.line("// J_arm q̇ of row `row` (of branch `br`), over the stored entries.");
+        self.open("fn arm_dot(row: u32, br: u32) -> f32");
+        let dot = match &windows {
+            Some(win) => window_dot(win, &rj),
+            None => {
+                let mut dot = String::from("0.0");
+                for d in j0..nd {
+                    write!(dot, " + {} * qd[{d}]", rj(d - j0)).expect("write to string");
+                }
+                dot
+            }
+        };
         self.line(format!("return {dot};"));
         self.close();
         self.line("");

@@ -25,6 +25,7 @@ pub(crate) use constraints::row_storage_floats;
 mod integrate;
 mod looped;
 mod objects;
+mod row_windows;
 mod state_io;
 
 use glam::{Mat3, Quat, Vec3};
@@ -348,6 +349,10 @@ mod tests {
         assert!(!ant.contains("amat[118]"));
         // Its rows leave out the floating root's six entries of each Jacobian: 8 of 14 stored.
         assert!(ant.contains("const NJ = 8u;") && ant.contains("cross(w, c_p[c] - fcom[0])"));
+        // A row on one leg reads that leg's window of two entries.
+        assert!(ant.contains(
+            "select(select(select(qd[6], qd[8], br == 1u), qd[10], br == 2u), qd[12], br == 3u)"
+        ));
     }
 
     /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.
@@ -366,6 +371,9 @@ mod tests {
             Some((3 * 12 + 27) * (21 + 27))
         );
         let looped = validate_form(&compiled, KernelForm::Looped);
+        // Its widest branch (abdomen and legs) spans 15 of the 21 stored entries, and its legs
+        // touch its arms: no Jacobian windows.
+        assert!(!looped.contains("fn body_branch"));
         let straight = validate_form(&compiled, KernelForm::StraightLine);
         // The looped form is the shorter kernel.
         assert!(looped.lines().count() < straight.lines().count() / 2);

@@ -20,11 +20,16 @@ fn object_k(o: i32, p: vec3<f32>, basis: mat3x3<f32>) -> vec3<f32> {
     return k;
 }
 
-// Stores the arm row `row` (J_arm = jt, W = A⁻¹ jtᵀ); returns J W.
-fn arm_row(row: u32, jt: array<f32, ND1>) -> f32 {
+// Stores the arm row `row` of branch `br` (J_arm = jt, W = A⁻¹ jtᵀ); returns J W.
+fn arm_row(row: u32, jt: array<f32, ND1>, br: u32) -> f32 {
     var w = jt;
     chol_solve(&w);
-    return arm_store(row, jt, w);
+    return arm_store(row, jt, w, br);
+}
+
+// The branch of a limit row with this slot (LIMIT_SLOT + 2 dof + side).
+fn limit_branch(slot: u32) -> u32 {
+    return dof_branch((slot - LIMIT_SLOT) / 2u);
 }
 
 // MuJoCo's impedance d(pos) of a penetration pos < 0 (solimp: IMP0 at contact, IMP1 from
@@ -123,6 +128,7 @@ fn build_contact(c: u32) {
     // The arm's part of the rows' start velocities, J_arm q̇₀, taken while each row's Jacobian
     // is still in registers rather than read back from the rows' storage.
     var v_arm = vec3<f32>(0.0);
+    let br = row_branch(ba, bb);
     if ba >= i32(NL) {
         let o = ba - i32(NL);
         k_pa[c] = p - obj_com(o);
@@ -141,7 +147,7 @@ fn build_contact(c: u32) {
         let arm_b = body_jt(bb, p, basis[d], -1.0, &jt);
         if arm_a || arm_b {
             info |= ROW_ARM;
-            k[d] += arm_row(c * 3u + d, jt);
+            k[d] += arm_row(c * 3u + d, jt, br);
             var s = 0.0;
             for (var i = 0u; i < ND1; i++) {
                 s += jt[i] * qd0[i];
@@ -151,6 +157,7 @@ fn build_contact(c: u32) {
     }
     // The floating root's entries of the rows, left out of their storage: its factor plus one.
     info |= u32(on_root_links(ba) - on_root_links(bb) + 1) << 24u;
+    info |= br << 26u;
     k_info[c] = info;
     // Start velocities of the three rows.
     let v0 = contact_object_vel0(info, k_pa[c], k_pb[c]) * basis + v_arm;
@@ -178,12 +185,14 @@ fn limit_row(jt: array<f32, ND1>, slot: u32, s: f32) {
         v0 += jt[d] * qd0[d];
         a0 += abs(jt[d]) * dof_invw[d];
     }
-    let row = normal_row(s, v0, arm_row(3u * MAX_C + l, jt), a0);
+    let br = limit_branch(slot);
+    let row = normal_row(s, v0, arm_row(3u * MAX_C + l, jt, br), a0);
     l_meff[l] = row.meff;
     l_tgt[l] = row.tgt;
     l_r[l] = row.r;
     l_lam[l] = 0.0;
     l_slot[l] = slot;
+    l_br[l] = br;
 }
 
 fn build_rows() {
@@ -322,13 +331,14 @@ fn normal_impulse(lam: f32, jv: f32, tgt: f32, r: f32, meff: f32) -> f32 {
 fn solve_contact(c: u32) {
     let info = k_info[c];
     let arm = (info & ROW_ARM) != 0u;
+    let br = info >> 26u;
     let basis = contact_basis(c_n[c]);
     let row = c * 3u;
     let meff = k_meff[c];
     let lam = k_lam[c];
     var jn = dot(contact_object_vel(c, info) + contact_root_vel(c, info), basis[0]);
     if arm {
-        jn += arm_dot(row);
+        jn += arm_dot(row, br);
     }
     let tgt = k_tgt[c];
     let r = k_r[c];
@@ -345,7 +355,7 @@ fn solve_contact(c: u32) {
         let v = contact_object_vel(c, info) + contact_root_vel(c, info);
         var jt = vec2<f32>(dot(v, basis[1]), dot(v, basis[2]));
         if arm {
-            jt += vec2<f32>(arm_dot(row + 1u), arm_dot(row + 2u));
+            jt += vec2<f32>(arm_dot(row + 1u, br), arm_dot(row + 2u, br));
         }
         lt = lam.yz - RELAXATION * meff.yz * (jt - tgt.yz + friction_r(r) * lam.yz);
         let mag = length(lt);
@@ -378,7 +388,7 @@ fn solve(sweeps: u32) {
         for (var l = 0u; l < nlim; l++) {
             let row = 3u * MAX_C + l;
             let lam = l_lam[l];
-            let nl = normal_impulse(lam, arm_dot(row), l_tgt[l], l_r[l], l_meff[l]);
+            let nl = normal_impulse(lam, arm_dot(row, l_br[l]), l_tgt[l], l_r[l], l_meff[l]);
             if nl != lam {
                 arm_axpy(row, nl - lam);
                 l_lam[l] = nl;

@@ -101,8 +101,8 @@ var<private> c_slot: array<u32, MAX_C>;
 // the traffic of this storage (it lives in local memory, and 65 536 envs' worth does not fit in
 // L2), so it recomputes the tangents and the object terms instead. `k_info` holds whether a
 // contact has an arm part (ROW_ARM), its two sides' free objects plus one (bits 8–15 and
-// 16–23, 0 for none) and the factor of the floating root's part plus one (bits 24–25; see
-// `contact_root_vel`). A penetrating contact or limit is a soft row of the configured contact
+// 16–23, 0 for none), the factor of the floating root's part plus one (bits 24–25; see
+// `contact_root_vel`) and the branch of its rows' Jacobian window (bits 26–31, `row_branch`). A penetrating contact or limit is a soft row of the configured contact
 // model (its rows' target velocities `k_tgt` and the normal row's regulariser `k_r`; see
 // `normal_row`), a gap a rigid speculative row.
 var<private> k_info: array<u32, MAX_C>;
@@ -118,6 +118,8 @@ var<private> l_tgt: array<f32, ND1>;
 var<private> l_r: array<f32, ND1>;
 var<private> l_lam: array<f32, ND1>;
 var<private> l_slot: array<u32, ND1>;
+// The branch of a limit row's Jacobian window (`dof_branch`).
+var<private> l_br: array<u32, ND1>;
 // Arm rows: J_arm and W of contact c's direction d at row 3c + d, of limit l at row 3 MAX_C + l
 // (J_arm's NJ stored entries, W's ND1), in `r_j` and `r_w` or in the `rows` buffer (generated
 // with their accessors).
