@@ -9,7 +9,8 @@ use std::fmt::Write as _;
 use super::Gen;
 use crate::compile::CompiledScene;
 
-/// The window of each branch of the floating root's tree.
+/// The window of each branch: each subtree hanging from the floating root's link, and each
+/// other (fixed-base) articulation.
 #[derive(Debug, PartialEq)]
 pub(super) struct JacobianWindows {
     /// Entries a window holds: the widest branch's span of dofs.
@@ -24,7 +25,7 @@ pub(super) struct JacobianWindows {
 }
 
 /// Six bits of a contact's info hold its rows' branch.
-const MAX_BRANCHES: usize = 63;
+const MAX_BRANCHES: usize = 64;
 
 impl JacobianWindows {
     /// The windows of `scene`, whose rows store `nj` Jacobian entries from dof `j0` on. A
@@ -155,7 +156,7 @@ impl Gen<'_> {
         self.line("");
     }
 
-    /// Lines storing row `row`'s window of `jt` for branch `br` into `rj` (`#`: the entry).
+    /// Lines storing the window of `jt` for the WGSL branch index `br`, entry `k` at `rj(k)`.
     pub(super) fn window_store(&mut self, w: &JacobianWindows, rj: &dyn Fn(usize) -> String) {
         for k in 0..w.width {
             let pick = window_pick(w, "jt", k);
@@ -164,7 +165,8 @@ impl Gen<'_> {
     }
 }
 
-/// The expression of row `row`'s window dot product with q̇ for branch `br`.
+/// The expression of the window dot product with q̇ for the WGSL branch index `br`, entry `k`
+/// of the row at `rj(k)`.
 pub(super) fn window_dot(w: &JacobianWindows, rj: &dyn Fn(usize) -> String) -> String {
     let mut dot = String::from("0.0");
     for k in 0..w.width {

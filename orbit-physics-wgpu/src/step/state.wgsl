@@ -102,8 +102,9 @@ var<private> c_slot: array<u32, MAX_C>;
 // L2), so it recomputes the tangents and the object terms instead. `k_info` holds whether a
 // contact has an arm part (ROW_ARM), its two sides' free objects plus one (bits 8–15 and
 // 16–23, 0 for none), the factor of the floating root's part plus one (bits 24–25; see
-// `contact_root_vel`) and the branch of its rows' Jacobian window (bits 26–31, `row_branch`). A penetrating contact or limit is a soft row of the configured contact
-// model (its rows' target velocities `k_tgt` and the normal row's regulariser `k_r`; see
+// `contact_root_vel`) and the branch of its rows' Jacobian window (bits 26–31,
+// `row_branch`). A penetrating contact or limit is a soft row of the configured contact model
+// (its rows' target velocities `k_tgt` and the normal row's regulariser `k_r`; see
 // `normal_row`), a gap a rigid speculative row.
 var<private> k_info: array<u32, MAX_C>;
 var<private> k_pa: array<vec3<f32>, MAX_C>;
