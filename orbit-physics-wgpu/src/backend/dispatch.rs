@@ -3,7 +3,7 @@
 
 use orbit_core::physics::PhysicsError;
 
-use super::{WORKGROUP, WgpuBackend, err};
+use super::{WgpuBackend, err};
 use crate::layout::{self, FRESH, NOT_FRESH, REPUBLISH};
 
 impl WgpuBackend {
@@ -57,7 +57,7 @@ impl WgpuBackend {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.dispatch_workgroups(self.buffers.num_envs.div_ceil(WORKGROUP) as u32, 1, 1);
+            pass.dispatch_workgroups(self.groups, 1, 1);
         }
         if let Some(t) = timer {
             encoder.resolve_query_set(&t.queries, 0..2, &t.resolved, 0);

@@ -69,6 +69,8 @@ pub struct WgpuBackend {
     lay_len: usize,
     /// Timestamps around the step kernel, on devices that have them.
     timer: Option<KernelTimer>,
+    /// Workgroups per dispatch of the step kernel.
+    groups: u32,
     /// `timestamps` holds the kernel times of a dispatch that ran substeps.
     timed: bool,
 }
@@ -108,12 +110,15 @@ impl WgpuBackend {
         }
         let scene = CompiledScene::new(desc)?;
         let gpu = gpu::gpu().map_err(err)?;
-        let buffers = BufferLayout::new(&scene, num_envs);
+        let mut buffers = BufferLayout::new(&scene, num_envs);
         let limits = &gpu.limits;
-        let groups = num_envs.div_ceil(WORKGROUP);
+        let subgroups = gpu.device.features().contains(wgpu::Features::SUBGROUP);
+        let form = form.unwrap_or_else(|| KernelForm::for_scene(&scene, subgroups));
+        buffers.warm_len = num_envs * form.warm_entries(&scene) * 4;
+        let groups = (num_envs * form.threads_per_env()).div_ceil(WORKGROUP);
         if groups > limits.max_compute_workgroups_per_dimension as usize {
             return Err(err(format!(
-                "{num_envs} envs need {groups} workgroups of {WORKGROUP}, more than the device's {}",
+                "{num_envs} envs need {groups} workgroups of {WORKGROUP} invocations, more than the device's {}",
                 limits.max_compute_workgroups_per_dimension
             )));
         }
@@ -142,7 +147,6 @@ impl WgpuBackend {
                 limits.max_uniform_buffer_binding_size
             )));
         }
-        let form = form.unwrap_or_else(|| KernelForm::for_scene(&scene));
         let source = codegen::kernel_source(&scene, sim, WORKGROUP, form);
         let pipeline = gpu.pipeline(&source, checks).map_err(err)?;
         let device = &gpu.device;
@@ -164,8 +168,10 @@ impl WgpuBackend {
         gpu.queue
             .write_buffer(&lay_buf, 0, bytemuck::cast_slice(&table));
         // (The bind group keeps the buffer alive.)
-        let rows_buf =
-            codegen::row_storage_floats(&scene, num_envs).map(|n| storage("orbit rows", n));
+        // The thread-per-branch form keeps its rows in registers.
+        let rows_buf = codegen::row_storage_floats(&scene, num_envs)
+            .filter(|_| form != KernelForm::ThreadPerBranch)
+            .map(|n| storage("orbit rows", n));
         let geometry_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("orbit geometry"),
             size: geometry_bytes,
@@ -257,6 +263,7 @@ impl WgpuBackend {
             lay_len: table.len(),
             buffers,
             timer,
+            groups: groups as u32,
             timed: false,
         };
         backend.init_state(desc);

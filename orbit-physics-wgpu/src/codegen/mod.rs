@@ -18,6 +18,8 @@
 //! queries they share, WGSL literals); each section of the kernel has its own module.
 
 mod articulation;
+mod branch_system;
+mod branch_threads;
 mod constants;
 mod constraints;
 
@@ -30,6 +32,8 @@ mod state_io;
 
 use glam::{Mat3, Quat, Vec3};
 use orbit_core::physics::SimCfg;
+
+pub use branch_threads::Branches;
 
 use crate::compile::{ArticulationBlock, CompiledScene, FreeRoot};
 
@@ -47,12 +51,20 @@ pub enum KernelForm {
     /// the articulation, which NVIDIA's driver builds in half the time of the Humanoid's
     /// straight-line one (docs/experiments/looped-kernel.md).
     Looped,
+    /// Four invocations per env, one per branch of a floating root whose branches are chains
+    /// of the same joints ([`Branches`]), sharing the root through quad operations (subgroup
+    /// operations on the device): straight-line code, each invocation's constants selected by
+    /// its lane (docs/experiments/ant-four-threads-per-env.md).
+    ThreadPerBranch,
 }
 
 impl KernelForm {
-    /// The form for `scene`: straight-line code up to [`STRAIGHT_LINE_DOFS`] dofs.
-    pub fn for_scene(scene: &CompiledScene) -> Self {
-        if scene.dofs.len() > STRAIGHT_LINE_DOFS {
+    /// The form for `scene`: a thread per branch where the scene has [`Branches`] and the device
+    /// has `subgroups` operations, else straight-line code up to [`STRAIGHT_LINE_DOFS`] dofs.
+    pub fn for_scene(scene: &CompiledScene, subgroups: bool) -> Self {
+        if subgroups && Branches::of(scene).is_some() {
+            Self::ThreadPerBranch
+        } else if scene.dofs.len() > STRAIGHT_LINE_DOFS {
             Self::Looped
         } else {
             Self::StraightLine
@@ -60,8 +72,28 @@ impl KernelForm {
     }
 }
 
+impl KernelForm {
+    /// Invocations per env.
+    pub fn threads_per_env(self) -> usize {
+        if self == Self::ThreadPerBranch { 4 } else { 1 }
+    }
+
+    /// Warm-start entries per env of `scene`'s kernel in this form: contacts and limit rows
+    /// share `MAX_CONTACTS`; with a thread per branch, each lane has one per chain dof.
+    pub fn warm_entries(self, scene: &CompiledScene) -> usize {
+        match (self, Branches::of(scene)) {
+            (Self::ThreadPerBranch, Some(b)) => 4 * b.chain_len(),
+            _ => crate::compile::MAX_CONTACTS,
+        }
+    }
+}
+
 /// The full WGSL source of the step kernel for `scene` in `form`, with `workgroup`
 /// invocations per workgroup.
+///
+/// # Panics
+///
+/// If `form` is [`KernelForm::ThreadPerBranch`] and `scene` has no [`Branches`].
 pub fn kernel_source(
     scene: &CompiledScene,
     sim: &SimCfg,
@@ -74,6 +106,11 @@ pub fn kernel_source(
         indent: 0,
     };
     g.constants(sim, workgroup);
+    if form == KernelForm::ThreadPerBranch {
+        let branches = Branches::of(scene).expect("a scene of the thread-per-branch form");
+        g.branch_threads(&branches);
+        return g.out + BRANCH_STEP_WGSL;
+    }
     match form {
         KernelForm::StraightLine => {
             g.state_io();
@@ -84,6 +121,7 @@ pub fn kernel_source(
             g.drives();
         }
         KernelForm::Looped => g.looped_articulation(),
+        KernelForm::ThreadPerBranch => unreachable!("written above"),
     }
     g.objects();
     g.collide();
@@ -106,12 +144,26 @@ const LOOPS_WGSL: &str = include_str!("../step/articulation_loops.wgsl");
 /// bindings, quaternion and matrix helpers, buffer addresses, the narrow phase, the constraint
 /// rows and their solver, and the substep with the entry point.
 const STEP_WGSL: &str = concat!(
+    include_str!("../step/bindings.wgsl"),
     include_str!("../step/state.wgsl"),
     include_str!("../step/math.wgsl"),
     include_str!("../step/addresses.wgsl"),
     include_str!("../step/narrow_phase.wgsl"),
+    include_str!("../step/rows.wgsl"),
     include_str!("../step/constraints.wgsl"),
+    include_str!("../step/run_env.wgsl"),
     include_str!("../step/substep.wgsl"),
+);
+
+/// The scene-independent half of the thread-per-branch kernel: bindings, helpers, the rows'
+/// model, and its entry point.
+const BRANCH_STEP_WGSL: &str = concat!(
+    include_str!("../step/bindings.wgsl"),
+    include_str!("../step/math.wgsl"),
+    include_str!("../step/addresses.wgsl"),
+    include_str!("../step/rows.wgsl"),
+    include_str!("../step/run_env.wgsl"),
+    include_str!("../step/branch_threads.wgsl"),
 );
 
 /// The WGSL writer: the scene, the text so far and the current indentation.
@@ -274,7 +326,7 @@ mod tests {
     use orbit_core::physics::SimCfg;
     use orbit_core::scene::{RootStateCfg, SceneCfg};
 
-    use super::{KernelForm, kernel_source, row_storage_floats};
+    use super::{Branches, KernelForm, kernel_source, row_storage_floats};
     use crate::compile::CompiledScene;
 
     /// Parses and validates a scene's kernel in `form` with naga (what wgpu does before any
@@ -283,24 +335,28 @@ mod tests {
         let src = kernel_source(scene, &SimCfg::default(), 64, form);
         let module = naga::front::wgsl::parse_str(&src)
             .unwrap_or_else(|e| panic!("{form:?}: {}", e.emit_to_string(&src)));
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{form:?}: {}", e.emit_to_string(&src)));
+        // Quad operations where the form uses them (the device's subgroup feature).
+        let capabilities = if form == KernelForm::ThreadPerBranch {
+            naga::valid::Capabilities::SUBGROUP
+        } else {
+            naga::valid::Capabilities::default()
+        };
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
+            .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{form:?}: {}", e.emit_to_string(&src)));
         src
     }
 
     /// Validates a scene's kernel in both forms; returns the one of the scene's own form.
     fn validate(cfg: &SceneCfg) -> String {
         let scene = CompiledScene::new(&resolve(cfg)).expect("scene compiles");
-        let other = match KernelForm::for_scene(&scene) {
+        let other = match KernelForm::for_scene(&scene, false) {
             KernelForm::StraightLine => KernelForm::Looped,
-            KernelForm::Looped => KernelForm::StraightLine,
+            _ => KernelForm::StraightLine,
         };
         validate_form(&scene, other);
-        validate_form(&scene, KernelForm::for_scene(&scene))
+        validate_form(&scene, KernelForm::for_scene(&scene, false))
     }
 
     #[test]
@@ -355,6 +411,42 @@ mod tests {
         ));
     }
 
+    /// The Ant without ground is four legs of two hinges on a floating root: with subgroup
+    /// operations its kernel has a thread per leg, each leg's constants selected by lane.
+    #[test]
+    fn ant_without_ground_has_a_thread_per_leg() {
+        let cfg = SceneCfg {
+            env_spacing: 3.0,
+            articulations: vec![orbit_conformance::standing_ant(0.6, &[])],
+            rigid_objects: vec![],
+            static_objects: vec![],
+        };
+        let scene = CompiledScene::new(&resolve(&cfg)).expect("scene compiles");
+        let branches = Branches::of(&scene).expect("the Ant's legs are branches");
+        assert_eq!((branches.chains.len(), branches.chain_len()), (4, 2));
+        assert_eq!(
+            KernelForm::for_scene(&scene, true),
+            KernelForm::ThreadPerBranch
+        );
+        assert_eq!(
+            KernelForm::for_scene(&scene, false),
+            KernelForm::StraightLine
+        );
+        let src = validate_form(&scene, KernelForm::ThreadPerBranch);
+        // The legs' dofs 6, 8, 10 and 12 by lane, and the root's force summed over the quad.
+        assert!(src.contains(
+            "select(select(select(6u, 8u, lane == 1u), 10u, lane == 2u), 12u, lane == 3u)"
+        ));
+        assert!(src.contains("let tw = fw + quad_sum3(fw0);"));
+        // On the ground (shape pairs), the form does not apply yet.
+        let ground = SceneCfg {
+            static_objects: vec![orbit_conformance::ground(1.0)],
+            ..cfg
+        };
+        let scene = CompiledScene::new(&resolve(&ground)).expect("scene compiles");
+        assert_eq!(Branches::of(&scene), None);
+    }
+
     /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.
     #[test]
     fn humanoid_kernel_is_valid_wgsl() {
@@ -363,7 +455,7 @@ mod tests {
         let scene = orbit_assets::load_scene(&file, &[]).expect("the humanoid scene resolves");
         let compiled = CompiledScene::new(&scene).expect("scene compiles");
         assert_eq!(compiled.articulations[0].dofs, 27);
-        assert_eq!(KernelForm::for_scene(&compiled), KernelForm::Looped);
+        assert_eq!(KernelForm::for_scene(&compiled, true), KernelForm::Looped);
         // Per env: 3 · 12 contact rows and 27 limit rows, of 21 stored Jacobian entries (the
         // floating root's six left out) and 27 of W.
         assert_eq!(

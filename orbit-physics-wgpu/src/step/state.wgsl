@@ -1,7 +1,7 @@
 // One invocation simulates one env for `params.substeps` substeps, then publishes its state.
 //
 // The files of `step/` are the scene-independent half of the kernel, in the order `codegen/mod.rs`
-// concatenates them (this one first). `codegen/` prepends the other half,
+// concatenates them (after `bindings.wgsl`). `codegen/` prepends the other half,
 // generated from the compiled scene: the constants (NL, ND, ..., the LAY_* and GEO_* offsets)
 // and straight-line functions in which every link, dof and object is spelled out with constant
 // indices (load_state, publish, kinematics, rnea_bias, crba, cholesky, chol_solve, drives,
@@ -20,28 +20,7 @@
 // Spatial vectors are (angular, linear) pairs in env-frame coordinates taken at the env origin;
 // a link's spatial inertia there is (mass m, first moment h = m c, rotational inertia J).
 
-struct Params {
-    substeps: u32,
-    // With no substeps: 1 to publish only the envs whose fresh input has REPUBLISH added
-    // (the others keep their published state untouched), 0 to publish every env.
-    only_marked: u32,
-    pad1: u32,
-    pad2: u32,
-}
-
-@group(0) @binding(0) var<storage, read_write> st: array<f32>;
-@group(0) @binding(1) var<storage, read> inp: array<f32>;
-@group(0) @binding(2) var<storage, read_write> warm: array<f32>;
-@group(0) @binding(3) var<uniform> params: Params;
-// Buffer offsets that depend on the number of envs (see layout.rs), so one compiled kernel
-// serves every env count of a scene.
-@group(0) @binding(4) var<storage, read> lay: array<u32>;
-// The scene's geometry table (compile.rs, `GeometryTable`): the same for every env.
-@group(0) @binding(5) var<uniform> geo: array<vec4<f32>, GEO_LEN>;
-
 const RMAX: u32 = MAX_C * 3u + ND1;
-// Warm-start slot ids: contacts by pair slot, joint limits after them.
-const LIMIT_SLOT: u32 = 0x40000000u;
 
 var<private> env: u32;
 var<private> num_envs: u32;

@@ -28,18 +28,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if env >= num_envs {
         return;
     }
-    if params.substeps == 0u && params.only_marked != 0u && inp[lay[LAY_IN_FRESH] + env] < REPUBLISH {
-        return;
-    }
-    load_state();
-    if params.substeps == 0u {
-        // Publish only (after a state write or a parameter change): keep the applied efforts
-        // of the last step.
-        load_applied();
-    }
-    for (var s = 0u; s < params.substeps; s++) {
-        first_substep = s == 0u;
-        substep();
-    }
-    publish();
+    run_env();
 }

@@ -1,0 +1,406 @@
+//! The kernel with one thread per branch of a floating root ([`KernelForm::ThreadPerBranch`],
+//! `step/branch_threads.wgsl`): which scenes it serves, its per-thread state, and the
+//! articulation's kinematics, bias forces and mass matrix. The system's factorisation, the
+//! limit rows and their solver, integration and the state's loads and stores are in
+//! `branch_system.rs`.
+//!
+//! [`KernelForm::ThreadPerBranch`]: super::KernelForm::ThreadPerBranch
+
+use glam::Vec3;
+use orbit_core::scene::JointKind;
+
+use super::{Gen, f, m3, q4, v3};
+use crate::compile::CompiledScene;
+
+/// At most this many branches: the lanes of a quad.
+const MAX_BRANCHES: usize = 4;
+
+/// A floating root and its branches, for a scene the one-thread-per-branch kernel serves.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Branches {
+    /// The floating root's link.
+    pub root: usize,
+    /// Each branch's links, from the root outwards.
+    pub chains: Vec<Vec<usize>>,
+}
+
+impl Branches {
+    /// The branches of a scene that is one floating root whose 2–4 branches are chains of the
+    /// same joints in the same order (the Ant's legs), without free objects or shape pairs
+    /// (this form has no contacts yet).
+    pub fn of(scene: &CompiledScene) -> Option<Self> {
+        let links = &scene.links;
+        if scene.articulations.len() != 1 || !scene.objects.is_empty() || !scene.pairs.is_empty() {
+            return None;
+        }
+        let (root, _) = scene.free_roots().next()?;
+        let children = |l: usize| -> Vec<usize> {
+            (0..links.len())
+                .filter(|&c| links[c].parent == Some(l))
+                .collect()
+        };
+        let firsts = children(root);
+        if !(2..=MAX_BRANCHES).contains(&firsts.len()) {
+            return None;
+        }
+        let mut chains = Vec::new();
+        for first in firsts {
+            let mut chain = vec![first];
+            loop {
+                match children(chain[chain.len() - 1])[..] {
+                    [] => break,
+                    [next] => chain.push(next),
+                    _ => return None,
+                }
+            }
+            chains.push(chain);
+        }
+        let shape: Vec<JointKind> = chains[0].iter().map(|&l| links[l].kind).collect();
+        let same = chains.iter().all(|c| {
+            c.len() == shape.len()
+                && c.iter()
+                    .zip(&shape)
+                    .all(|(&l, &k)| links[l].kind == k && links[l].dof.is_some())
+        });
+        (same && 1 + chains.len() * shape.len() == links.len()).then_some(Self { root, chains })
+    }
+
+    /// Links (and dofs) per chain.
+    pub fn chain_len(&self) -> usize {
+        self.chains[0].len()
+    }
+}
+
+/// Root dof `k`'s motion subspace as WGSL `(angular, linear)`: a unit translation of the root's
+/// centre of mass along env axis `k`, or a unit rotation about it about axis `k − 3`.
+pub(super) fn root_motion(k: usize) -> (String, String) {
+    let e = v3(Vec3::AXES[k % 3]);
+    if k < 3 {
+        ("vec3<f32>(0.0)".into(), e)
+    } else {
+        (e.clone(), format!("cross(fcom, {e})"))
+    }
+}
+
+impl Gen<'_> {
+    /// The value of chain slot `i` on this lane, `value` of each branch's link there: a select
+    /// over the lanes (lanes past the last branch take branch 0's).
+    pub(super) fn per_lane(
+        &self,
+        br: &Branches,
+        i: usize,
+        value: impl Fn(usize) -> String,
+    ) -> String {
+        let values: Vec<String> = br.chains.iter().map(|c| value(c[i])).collect();
+        let mut s = values[0].clone();
+        for (b, v) in values.iter().enumerate().skip(1) {
+            if *v != values[0] {
+                s = format!("select({s}, {v}, lane == {b}u)");
+            }
+        }
+        s
+    }
+
+    /// ` * bmask` where some lanes hold no branch (their share of a sum is zero), else nothing.
+    pub(super) fn masked(br: &Branches) -> &'static str {
+        if br.chains.len() < MAX_BRANCHES {
+            " * bmask"
+        } else {
+            ""
+        }
+    }
+
+    /// The form's scene half: state, articulation, system, rows, integration, loads and stores.
+    pub(super) fn branch_threads(&mut self, br: &Branches) {
+        self.branch_state(br);
+        self.branch_kinematics(br);
+        self.branch_rnea(br);
+        self.branch_crba(br);
+        self.branch_drives(br);
+        self.branch_factor(br);
+        self.branch_limit_rows(br);
+        self.branch_solver(br);
+        self.branch_integrate(br);
+        self.branch_state_io(br);
+    }
+
+    fn branch_state(&mut self, br: &Branches) {
+        let n = br.chain_len();
+        self.line(format!(
+            "const GEO_LEN = {}u;",
+            self.scene.geometry_table().data.len().max(1)
+        ));
+        self.line(format!("const NBR = {}u;", br.chains.len()));
+        self.line(format!("const NCH = {n}u;"));
+        self.line("// 1 on lanes that hold a branch, 0 on the others.");
+        self.line("var<private> bmask: f32;");
+        self.line("// The env-frame position of the kernel's frame origin (the root's centre of mass at load).");
+        self.line("var<private> shift: vec3<f32>;");
+        self.line(
+            "// The floating root: centre of mass, orientation, their velocities (every lane).",
+        );
+        for v in [
+            "fcom: vec3<f32>",
+            "rrot: vec4<f32>",
+            "rv: vec3<f32>",
+            "rw: vec3<f32>",
+        ] {
+            self.line(format!("var<private> {v};"));
+        }
+        self.line(
+            "// Its link's origin, spatial velocity and inertia, mass scale and bias forces.",
+        );
+        for v in [
+            "rpos: vec3<f32>",
+            "rvw: vec3<f32>",
+            "rvu: vec3<f32>",
+            "rim: f32",
+            "rih: vec3<f32>",
+            "rij: mat3x3<f32>",
+            "rms: f32",
+            "rbias: array<f32, 6>",
+        ] {
+            self.line(format!("var<private> {v};"));
+        }
+        self.line("// This lane's chain (indexed by constants only).");
+        for v in [
+            "q", "qd", "qd0", "bias", "applied", "in_ef", "in_qt", "in_vt", "ms", "im",
+        ] {
+            self.line(format!("var<private> {v}: array<f32, NCH>;"));
+        }
+        self.line("var<private> in_comp: array<bool, NCH>;");
+        for v in ["lpos", "sw", "su", "vw", "vu", "ih"] {
+            self.line(format!("var<private> {v}: array<vec3<f32>, NCH>;"));
+        }
+        self.line("var<private> lrot: array<vec4<f32>, NCH>;");
+        self.line("var<private> ij: array<mat3x3<f32>, NCH>;");
+        self.line(
+            "// A_bb (lower triangle, then its Cholesky factor and inverse diagonal), A_b,root,",
+        );
+        self.line("// C_b = −A_bb⁻¹ A_b,root and the root's block: A_root, then S and its factor.");
+        self.line("var<private> abb: array<f32, NCH * NCH>;");
+        self.line("var<private> abb_inv: array<f32, NCH>;");
+        self.line("var<private> abr: array<array<f32, 6>, NCH>;");
+        self.line("var<private> cc: array<array<f32, 6>, NCH>;");
+        self.line("var<private> sm: array<f32, 36>;");
+        self.line("var<private> sm_inv: array<f32, 6>;");
+        self.line("");
+    }
+
+    /// Emits the spatial inertia at the kernel origin of a body at `pos`, `rot` (in scope)
+    /// into `dm`, `dh`, `dj`.
+    fn branch_inertia(
+        &mut self,
+        scale: &str,
+        mass: &str,
+        com: &str,
+        inertia: &str,
+        dst: [&str; 3],
+    ) {
+        self.line(format!("let m = {mass} * {scale};"));
+        self.line(format!("let c = pos + qrot(rot, {com});"));
+        self.line("let r = qmat(rot);");
+        self.line(format!(
+            "let ic = r * ({inertia} * {scale}) * transpose(r);"
+        ));
+        self.line("let cc = dot(c, c);");
+        self.line(format!("{} = m;", dst[0]));
+        self.line(format!("{} = m * c;", dst[1]));
+        self.line(format!(
+            "{} = ic + m * (mat3x3<f32>(cc, 0.0, 0.0, 0.0, cc, 0.0, 0.0, 0.0, cc) - outer(c, c));",
+            dst[2]
+        ));
+    }
+
+    fn branch_kinematics(&mut self, br: &Branches) {
+        let s = self.scene;
+        let root = &s.links[br.root];
+        self.line("// Forward kinematics, motion subspaces, spatial velocities and inertias.");
+        self.open("fn kinematics()");
+        self.open("");
+        self.line("let rot = rrot;");
+        self.line(format!(
+            "let pos = fcom - qrot(rot, {});",
+            v3(root.inertial.com)
+        ));
+        self.line("rpos = pos;");
+        self.line("rvw = rw;");
+        self.line("rvu = rv + cross(fcom, rvw);");
+        let i = &root.inertial;
+        let (mass, com, inertia) = (f(i.mass), v3(i.com), m3(i.inertia));
+        self.branch_inertia("rms", &mass, &com, &inertia, ["rim", "rih", "rij"]);
+        self.close();
+        for k in 0..br.chain_len() {
+            let (pp, pr, pw, pu) = if k == 0 {
+                ("rpos".into(), "rrot".into(), "rvw".into(), "rvu".into())
+            } else {
+                let p = k - 1;
+                (
+                    format!("lpos[{p}]"),
+                    format!("lrot[{p}]"),
+                    format!("vw[{p}]"),
+                    format!("vu[{p}]"),
+                )
+            };
+            let opos = self.per_lane(br, k, |l| v3(s.links[l].origin.pos));
+            let orot = self.per_lane(br, k, |l| q4(s.links[l].origin.rot));
+            let axis = self.per_lane(br, k, |l| v3(s.links[l].axis));
+            self.open("");
+            self.line(format!("var pos = {pp} + qrot({pr}, {opos});"));
+            self.line(format!("var rot = qmul({pr}, {orot});"));
+            self.line(format!("let axis = {axis};"));
+            self.line("let axis_w = qrot(rot, axis);");
+            if s.links[br.chains[0][k]].kind == JointKind::Prismatic {
+                self.line(format!("pos = pos + axis_w * q[{k}];"));
+                self.line(format!("sw[{k}] = vec3<f32>(0.0);"));
+                self.line(format!("su[{k}] = axis_w;"));
+            } else {
+                self.line(format!("rot = qmul(rot, qaxis(axis, q[{k}]));"));
+                self.line(format!("sw[{k}] = axis_w;"));
+                self.line(format!("su[{k}] = cross(pos, axis_w);"));
+            }
+            self.line(format!("lpos[{k}] = pos;"));
+            self.line(format!("lrot[{k}] = rot;"));
+            self.line(format!("vw[{k}] = {pw} + sw[{k}] * qd[{k}];"));
+            self.line(format!("vu[{k}] = {pu} + su[{k}] * qd[{k}];"));
+            let mass = self.per_lane(br, k, |l| f(s.links[l].inertial.mass));
+            let com = self.per_lane(br, k, |l| v3(s.links[l].inertial.com));
+            // `select` takes no matrices: a matrix of per-lane columns.
+            let column =
+                |c: usize| self.per_lane(br, k, |l| v3(s.links[l].inertial.inertia.col(c)));
+            let inertia = format!("mat3x3<f32>({}, {}, {})", column(0), column(1), column(2));
+            let dst = [format!("im[{k}]"), format!("ih[{k}]"), format!("ij[{k}]")];
+            self.branch_inertia(
+                &format!("ms[{k}]"),
+                &mass,
+                &com,
+                &inertia,
+                [&dst[0], &dst[1], &dst[2]],
+            );
+            self.close();
+        }
+        self.close();
+        self.line("");
+    }
+
+    fn branch_rnea(&mut self, br: &Branches) {
+        let n = br.chain_len();
+        let bm = Self::masked(br);
+        self.line("// Bias forces c(q, q̇) by recursive Newton–Euler with q̈ = 0 (gravity as a base acceleration).");
+        self.open("fn rnea_bias()");
+        self.line("let aw = vec3<f32>(0.0);");
+        self.line("let au = -GRAVITY + cross(rv, rvw);");
+        self.line("let ivw = rij * rvw + cross(rih, rvu);");
+        self.line("let ivu = rim * rvu - cross(rih, rvw);");
+        self.line("let fw = rij * aw + cross(rih, au) + cross(rvw, ivw) + cross(rvu, ivu);");
+        self.line("let fu = rim * au - cross(rih, aw) + cross(rvw, ivu);");
+        for k in 0..n {
+            let (aw0, au0) = if k == 0 {
+                ("aw".to_string(), "au".to_string())
+            } else {
+                (format!("aw{}", k - 1), format!("au{}", k - 1))
+            };
+            self.line(format!(
+                "let aw{k} = {aw0} + cross(vw[{k}], sw[{k}]) * qd[{k}];"
+            ));
+            self.line(format!(
+                "let au{k} = {au0} + (cross(vw[{k}], su[{k}]) + cross(vu[{k}], sw[{k}])) * qd[{k}];"
+            ));
+            self.line(format!(
+                "let ivw{k} = ij[{k}] * vw[{k}] + cross(ih[{k}], vu[{k}]);"
+            ));
+            self.line(format!(
+                "let ivu{k} = im[{k}] * vu[{k}] - cross(ih[{k}], vw[{k}]);"
+            ));
+            self.line(format!(
+                "var fw{k} = ij[{k}] * aw{k} + cross(ih[{k}], au{k}) + cross(vw[{k}], ivw{k}) + cross(vu[{k}], ivu{k});"
+            ));
+            self.line(format!(
+                "var fu{k} = im[{k}] * au{k} - cross(ih[{k}], aw{k}) + cross(vw[{k}], ivu{k});"
+            ));
+        }
+        for k in (0..n).rev() {
+            self.line(format!(
+                "bias[{k}] = dot(sw[{k}], fw{k}) + dot(su[{k}], fu{k});"
+            ));
+            if k > 0 {
+                self.line(format!("fw{} = fw{} + fw{k};", k - 1, k - 1));
+                self.line(format!("fu{} = fu{} + fu{k};", k - 1, k - 1));
+            }
+        }
+        self.line("// The root's force: its own and its branches', summed in lane order.");
+        self.line(format!("let tw = fw + quad_sum3(fw0{bm});"));
+        self.line(format!("let tu = fu + quad_sum3(fu0{bm});"));
+        for k in 0..6 {
+            let (sw, su) = root_motion(k);
+            self.line(format!("rbias[{k}] = dot({sw}, tw) + dot({su}, tu);"));
+        }
+        self.close();
+        self.line("");
+    }
+
+    fn branch_crba(&mut self, br: &Branches) {
+        let n = br.chain_len();
+        let bm = Self::masked(br);
+        let s = self.scene;
+        self.line(
+            "// The mass matrix by the composite-rigid-body algorithm, plus armature: A_bb and",
+        );
+        self.line("// A_b,root of this lane's chain, A_root into sm.");
+        self.open("fn crba()");
+        for k in 0..n {
+            self.line(format!("var cm{k} = im[{k}];"));
+            self.line(format!("var ch{k} = ih[{k}];"));
+            self.line(format!("var cj{k} = ij[{k}];"));
+        }
+        for k in (1..n).rev() {
+            let p = k - 1;
+            self.line(format!("cm{p} = cm{p} + cm{k};"));
+            self.line(format!("ch{p} = ch{p} + ch{k};"));
+            self.line(format!("cj{p} = cj{p} + cj{k};"));
+        }
+        self.line(format!("let cm = rim + quad_sum(cm0{bm});"));
+        self.line(format!("let ch = rih + quad_sum3(ch0{bm});"));
+        self.line(format!(
+            "let cj = rij + mat3x3<f32>(quad_sum3(cj0[0]{bm}), quad_sum3(cj0[1]{bm}), quad_sum3(cj0[2]{bm}));"
+        ));
+        for b in 0..6 {
+            let (sw, su) = root_motion(b);
+            self.open("");
+            self.line(format!("let fw = cj * {sw} + cross(ch, {su});"));
+            self.line(format!("let fu = cm * {su} - cross(ch, {sw});"));
+            for a in b..6 {
+                let (swa, sua) = root_motion(a);
+                self.line(format!(
+                    "sm[{}] = dot({swa}, fw) + dot({sua}, fu);",
+                    a * 6 + b
+                ));
+            }
+            self.close();
+        }
+        for j in 0..n {
+            self.open("");
+            self.line(format!("let fw = cj{j} * sw[{j}] + cross(ch{j}, su[{j}]);"));
+            self.line(format!("let fu = cm{j} * su[{j}] - cross(ch{j}, sw[{j}]);"));
+            for i in 0..=j {
+                self.line(format!(
+                    "abb[{}] = dot(sw[{i}], fw) + dot(su[{i}], fu);",
+                    j * n + i
+                ));
+            }
+            for k in 0..6 {
+                let (swk, suk) = root_motion(k);
+                self.line(format!("abr[{j}][{k}] = dot({swk}, fw) + dot({suk}, fu);"));
+            }
+            let arm = self.per_lane(br, j, |l| {
+                f(s.dofs[s.links[l].dof.expect("chain links have a dof")].armature)
+            });
+            if arm != f(0.0) {
+                self.line(format!("abb[{}] += {arm};", j * n + j));
+            }
+            self.close();
+        }
+        self.close();
+        self.line("");
+    }
+}
