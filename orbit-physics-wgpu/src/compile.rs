@@ -305,7 +305,7 @@ fn shape_data(shape: &Shape, body: Option<usize>, what: &str) -> Result<ShapeDat
 }
 
 /// Contact slots of a pair: one per candidate point.
-fn slots(a: ShapeKind, b: ShapeKind) -> usize {
+pub(crate) fn slots(a: ShapeKind, b: ShapeKind) -> usize {
     match (a, b) {
         (ShapeKind::Sphere, _) => 1,
         (ShapeKind::Capsule, ShapeKind::Box) => 3,

@@ -271,7 +271,7 @@ impl Gen<'_> {
 
     /// Emits `x` applied through row `row`'s W (root part in `wr`, chain part in `wb`) to the
     /// root's and this chain's velocities.
-    fn branch_push(&mut self, n: usize, (wr, wb, row): (&str, &str, &str), x: &str) {
+    pub(super) fn branch_push(&mut self, n: usize, (wr, wb, row): (&str, &str, &str), x: &str) {
         self.line(format!(
             "rv += vec3<f32>({wr}[{row}][0], {wr}[{row}][1], {wr}[{row}][2]) * {x};"
         ));
@@ -301,9 +301,10 @@ impl Gen<'_> {
         self.line("if first_substep && inp[lay[LAY_IN_FRESH] + env] != 0.0 { return; }");
         self.line("let v0 = rv;");
         self.line("let w0 = rw;");
+        self.branch_contact_warm(br);
         for j in 0..n {
             self.open(format!("if l_on[{j}]"));
-            self.line(format!("let k = lane * NCH + {j}u;"));
+            self.line(format!("let k = lane * WARM_LANE + C_CAP + {j}u;"));
             self.open(format!(
                 "if bitcast<u32>(warm[warm_addr(k, 0u)]) == l_slot[{j}] && warm[warm_addr(k, 1u)] != 0.0"
             ));
@@ -320,8 +321,9 @@ impl Gen<'_> {
         self.close();
         self.line("");
         self.open("fn store_warm()");
+        self.branch_contact_store(br);
         for j in 0..n {
-            self.line(format!("let k{j} = lane * NCH + {j}u;"));
+            self.line(format!("let k{j} = lane * WARM_LANE + C_CAP + {j}u;"));
             self.line(format!(
                 "warm[warm_addr(k{j}, 0u)] = bitcast<f32>(select(0xFFFFFFFFu, l_slot[{j}], l_on[{j}]));"
             ));
@@ -335,6 +337,7 @@ impl Gen<'_> {
             "// The soft step's relaxation rows: penetrating rows become rigid with target 0.",
         );
         self.open("fn relax_rows()");
+        self.branch_contact_relax(br);
         for j in 0..n {
             self.open(format!("if l_on[{j}] && l_r[{j}] != 0.0"));
             self.line(format!(
@@ -352,29 +355,34 @@ impl Gen<'_> {
         self.line("// the other lanes take the root's velocity from the owner.");
         self.open("fn solve(sweeps: u32)");
         self.open("for (var it = 0u; it < sweeps; it++)");
-        for t in 0..br.chains.len() {
-            self.open(format!("if lane == {t}u"));
-            for j in 0..n {
-                self.open(format!("if l_on[{j}]"));
-                self.line(format!("let lam = l_lam[{j}];"));
-                self.line(format!(
-                    "let nl = normal_impulse(lam, l_sd[{j}] * qd[{j}], l_tgt[{j}], l_r[{j}], l_meff[{j}]);"
-                ));
-                self.open("if nl != lam");
-                self.branch_push(n, ("l_wr", "l_wb", &j.to_string()), "(nl - lam)");
-                self.line(format!("l_lam[{j}] = nl;"));
-                self.close();
-                self.close();
-            }
+        self.line(
+            "// One copy of the turn's code: the owner's velocity by a shuffle within the quad.",
+        );
+        self.open("for (var t = 0u; t < NBR; t++)");
+        self.open("if lane == t");
+        self.branch_contact_visits(br);
+        for j in 0..n {
+            self.open(format!("if l_on[{j}]"));
+            self.line(format!("let lam = l_lam[{j}];"));
+            self.line(format!(
+                "let nl = normal_impulse(lam, l_sd[{j}] * qd[{j}], l_tgt[{j}], l_r[{j}], l_meff[{j}]);"
+            ));
+            self.open("if nl != lam");
+            self.branch_push(n, ("l_wr", "l_wb", &j.to_string()), "(nl - lam)");
+            self.line(format!("l_lam[{j}] = nl;"));
             self.close();
-            self.line(format!("let nv{t} = quadBroadcast(rv, {t}u);"));
-            self.line(format!("let nw{t} = quadBroadcast(rw, {t}u);"));
-            self.open(format!("if lane != {t}u"));
-            self.branch_follow(n, &format!("nv{t} - rv"), &format!("nw{t} - rw"));
             self.close();
-            self.line(format!("rv = nv{t};"));
-            self.line(format!("rw = nw{t};"));
         }
+        self.close();
+        self.line("let owner = (sid & ~3u) | t;");
+        self.line("let nv = subgroupShuffle(rv, owner);");
+        self.line("let nw = subgroupShuffle(rw, owner);");
+        self.open("if lane != t");
+        self.branch_follow(n, "nv - rv", "nw - rw");
+        self.close();
+        self.line("rv = nv;");
+        self.line("rw = nw;");
+        self.close();
         self.close();
         self.close();
         self.line("");

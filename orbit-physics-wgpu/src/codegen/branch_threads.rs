@@ -10,7 +10,7 @@ use glam::Vec3;
 use orbit_core::scene::JointKind;
 
 use super::{Gen, f, m3, q4, v3};
-use crate::compile::CompiledScene;
+use crate::compile::{self, CompiledScene, MAX_CONTACTS};
 
 /// At most this many branches: the lanes of a quad.
 const MAX_BRANCHES: usize = 4;
@@ -22,15 +22,21 @@ pub struct Branches {
     pub root: usize,
     /// Each branch's links, from the root outwards.
     pub chains: Vec<Vec<usize>>,
+    /// The lane that tests each group of shape pairs (the geometry table's order): its
+    /// branch's, or lane 0 for the root's link against fixed shapes.
+    pub group_lanes: Vec<usize>,
+    /// Contact slots per lane: the most contacts any lane's pairs can make, at most
+    /// `MAX_CONTACTS`.
+    pub contact_slots: usize,
 }
 
 impl Branches {
     /// The branches of a scene that is one floating root whose 2–4 branches are chains of the
-    /// same joints in the same order (the Ant's legs), without free objects or shape pairs
-    /// (this form has no contacts yet).
+    /// same joints in the same order (the Ant's legs), without free objects, where no shape pair
+    /// joins two branches.
     pub fn of(scene: &CompiledScene) -> Option<Self> {
         let links = &scene.links;
-        if scene.articulations.len() != 1 || !scene.objects.is_empty() || !scene.pairs.is_empty() {
+        if scene.articulations.len() != 1 || !scene.objects.is_empty() {
             return None;
         }
         let (root, _) = scene.free_roots().next()?;
@@ -62,7 +68,38 @@ impl Branches {
                     .zip(&shape)
                     .all(|(&l, &k)| links[l].kind == k && links[l].dof.is_some())
         });
-        (same && 1 + chains.len() * shape.len() == links.len()).then_some(Self { root, chains })
+        if !same || 1 + chains.len() * shape.len() != links.len() {
+            return None;
+        }
+        // Each group of pairs joins at most one branch (and the root's link or fixed shapes).
+        let branch_of = |side: f32| -> Option<usize> {
+            let b = side as i64;
+            (b >= 0).then(|| chains.iter().position(|c| c.contains(&(b as usize))))?
+        };
+        let geo = scene.geometry_table();
+        let mut group_lanes = Vec::new();
+        let mut slots = vec![0; chains.len()];
+        for g in 0..geo.num_groups {
+            let [a, b, first, count] = geo.data[geo.groups + g];
+            let lane = match (branch_of(a), branch_of(b)) {
+                (Some(x), Some(y)) if x != y => return None,
+                (Some(x), _) | (_, Some(x)) => x,
+                (None, None) => 0,
+            };
+            for k in first as usize..(first + count) as usize {
+                let [pa, pb, _, _] = geo.data[geo.pairs + k];
+                let kind = |s: f32| scene.shapes[s as usize].kind;
+                slots[lane] += compile::slots(kind(pa), kind(pb));
+            }
+            group_lanes.push(lane);
+        }
+        let contact_slots = slots.into_iter().max().unwrap_or(0).min(MAX_CONTACTS);
+        Some(Self {
+            root,
+            chains,
+            group_lanes,
+            contact_slots,
+        })
     }
 
     /// Links (and dofs) per chain.
@@ -113,11 +150,13 @@ impl Gen<'_> {
     /// The form's scene half: state, articulation, system, rows, integration, loads and stores.
     pub(super) fn branch_threads(&mut self, br: &Branches) {
         self.branch_state(br);
+        self.branch_contact_state(br);
         self.branch_kinematics(br);
         self.branch_rnea(br);
         self.branch_crba(br);
         self.branch_drives(br);
         self.branch_factor(br);
+        self.branch_contact_rows(br);
         self.branch_limit_rows(br);
         self.branch_solver(br);
         self.branch_integrate(br);
@@ -126,24 +165,20 @@ impl Gen<'_> {
 
     fn branch_state(&mut self, br: &Branches) {
         let n = br.chain_len();
-        self.line(format!(
-            "const GEO_LEN = {}u;",
-            self.scene.geometry_table().data.len().max(1)
-        ));
         self.line(format!("const NBR = {}u;", br.chains.len()));
         self.line(format!("const NCH = {n}u;"));
         self.line("// 1 on lanes that hold a branch, 0 on the others.");
         self.line("var<private> bmask: f32;");
         self.line("// The env-frame position of the kernel's frame origin (the root's centre of mass at load).");
         self.line("var<private> shift: vec3<f32>;");
-        self.line(
-            "// The floating root: centre of mass, orientation, their velocities (every lane).",
-        );
+        self.line("// The floating root: centre of mass, orientation, their velocities now and at the substep's start (every lane).");
         for v in [
             "fcom: vec3<f32>",
             "rrot: vec4<f32>",
             "rv: vec3<f32>",
             "rw: vec3<f32>",
+            "rv0: vec3<f32>",
+            "rw0: vec3<f32>",
         ] {
             self.line(format!("var<private> {v};"));
         }

@@ -20,14 +20,10 @@ impl Gen<'_> {
     /// own arrays keep constant indices.
     pub(super) fn collide(&mut self) {
         let s = self.scene;
-        let geo = s.geometry_table();
-        let c = |g: &mut Self, name: &str, v: usize| g.line(format!("const {name} = {v}u;"));
-        c(self, "GEO_LEN", geo.data.len().max(1));
-        c(self, "GEO_SHAPES", geo.shapes);
-        c(self, "GEO_BODIES", geo.bodies);
-        c(self, "GEO_GROUPS", geo.groups);
-        c(self, "GEO_PAIRS", geo.pairs);
-        c(self, "NG", geo.num_groups);
+        self.geometry_constants();
+        self.line("// Contacts an env keeps (the deepest), and the groups of pairs this invocation tests.");
+        self.line("const C_CAP = MAX_C;");
+        self.line("fn group_here(g: u32) -> bool { return true; }");
         self.line("// Body poses for the narrow phase (links, then free objects).");
         self.open("fn copy_body_poses()");
         let nl = s.links.len();
@@ -45,6 +41,18 @@ impl Gen<'_> {
         }
         self.close();
         self.line("");
+    }
+
+    /// The geometry table's length and offsets, and its number of groups of pairs.
+    pub(super) fn geometry_constants(&mut self) {
+        let geo = self.scene.geometry_table();
+        let c = |g: &mut Self, name: &str, v: usize| g.line(format!("const {name} = {v}u;"));
+        c(self, "GEO_LEN", geo.data.len().max(1));
+        c(self, "GEO_SHAPES", geo.shapes);
+        c(self, "GEO_BODIES", geo.bodies);
+        c(self, "GEO_GROUPS", geo.groups);
+        c(self, "GEO_PAIRS", geo.pairs);
+        c(self, "NG", geo.num_groups);
     }
 
     /// Row Jacobians of points on links, and the arm parts of the rows.

@@ -18,6 +18,7 @@
 //! queries they share, WGSL literals); each section of the kernel has its own module.
 
 mod articulation;
+mod branch_contacts;
 mod branch_system;
 mod branch_threads;
 mod constants;
@@ -82,7 +83,7 @@ impl KernelForm {
     /// share `MAX_CONTACTS`; with a thread per branch, each lane has one per chain dof.
     pub fn warm_entries(self, scene: &CompiledScene) -> usize {
         match (self, Branches::of(scene)) {
-            (Self::ThreadPerBranch, Some(b)) => 4 * b.chain_len(),
+            (Self::ThreadPerBranch, Some(b)) => 4 * Gen::warm_per_lane(&b),
             _ => crate::compile::MAX_CONTACTS,
         }
     }
@@ -161,6 +162,7 @@ const BRANCH_STEP_WGSL: &str = concat!(
     include_str!("../step/bindings.wgsl"),
     include_str!("../step/math.wgsl"),
     include_str!("../step/addresses.wgsl"),
+    include_str!("../step/narrow_phase.wgsl"),
     include_str!("../step/rows.wgsl"),
     include_str!("../step/run_env.wgsl"),
     include_str!("../step/branch_threads.wgsl"),
@@ -438,13 +440,17 @@ mod tests {
             "select(select(select(6u, 8u, lane == 1u), 10u, lane == 2u), 12u, lane == 3u)"
         ));
         assert!(src.contains("let tw = fw + quad_sum3(fw0);"));
-        // On the ground (shape pairs), the form does not apply yet.
+        // On the ground each lane tests its leg's shapes (and lane 0 the torso's) against it.
         let ground = SceneCfg {
             static_objects: vec![orbit_conformance::ground(1.0)],
             ..cfg
         };
         let scene = CompiledScene::new(&resolve(&ground)).expect("scene compiles");
-        assert_eq!(Branches::of(&scene), None);
+        let branches = Branches::of(&scene).expect("no pair joins two legs");
+        assert_eq!(branches.group_lanes, [0, 0, 0, 1, 1, 2, 2, 3, 3]);
+        // Its contacts' visits sit in one loop over the legs' turns.
+        let src = validate_form(&scene, KernelForm::ThreadPerBranch);
+        assert!(src.contains("for (var t = 0u; t < NBR; t++)"));
     }
 
     /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.

@@ -15,6 +15,8 @@
 var<private> env: u32;
 var<private> num_envs: u32;
 var<private> lane: u32;
+// This invocation's index in its subgroup (a quad is four consecutive ones).
+var<private> sid: u32;
 // Whether the substep running is the first of this dispatch (a written env skips the warm
 // start of that one only).
 var<private> first_substep: bool;
@@ -30,10 +32,14 @@ fn quad_sum3(x: vec3<f32>) -> vec3<f32> {
 
 fn substep() {
     qd0 = qd;
+    rv0 = rv;
+    rw0 = rw;
     kinematics();
     rnea_bias();
     crba();
     drives();
+    collide();
+    build_contacts();
     limit_rows();
     warm_start();
     solve(ITERATIONS);
@@ -46,9 +52,8 @@ fn substep() {
 }
 
 @compute @workgroup_size(WORKGROUP)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    // The geometry table is bound for every form; this one has no shape pairs.
-    _ = geo[0];
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(subgroup_invocation_id) si: u32) {
+    sid = si;
     env = gid.x / 4u;
     lane = gid.x % 4u;
     num_envs = lay[LAY_NUM_ENVS];

@@ -85,10 +85,10 @@ fn plane_gap(bpos: vec3<f32>, brot: vec4<f32>, p: vec3<f32>) -> f32 {
 
 fn add_contact(sep: f32, n: vec3<f32>, p: vec3<f32>, ba: i32, bb: i32, mu: f32, slot: u32) {
     var i = nc;
-    if nc == MAX_C {
+    if nc == C_CAP {
         // Full: replace the shallowest contact if this one is deeper.
         var worst = 0u;
-        for (var k = 1u; k < MAX_C; k++) {
+        for (var k = 1u; k < C_CAP; k++) {
             if c_sep[k] > c_sep[worst] {
                 worst = k;
             }
@@ -381,6 +381,9 @@ fn collide() {
     nc = 0u;
     copy_body_poses();
     for (var g = 0u; g < NG; g++) {
+        if !group_here(g) {
+            continue;
+        }
         let grp = geo[GEO_GROUPS + g];
         let side_a = i32(grp.x);
         let side_b = i32(grp.y);
