@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 
 use orbit_core::scene::JointKind;
 
+use super::emitters::{DenseCholesky, DriveTerms};
 use super::{Gen, f, m3, q4, v3};
 use crate::compile::FreeRoot;
 
@@ -61,31 +62,19 @@ impl Gen<'_> {
             };
             let d = link.dof.expect("non-root links have a dof");
             self.open("");
-            self.line(format!(
-                "var pos = lpos[{p}] + qrot(lrot[{p}], {});",
-                v3(link.origin.pos)
-            ));
-            self.line(format!(
-                "var rot = qmul(lrot[{p}], {});",
-                q4(link.origin.rot)
-            ));
-            self.line(format!("let axis_w = qrot(rot, {});", v3(link.axis)));
-            if link.kind == JointKind::Prismatic {
-                self.line(format!("pos = pos + axis_w * q[{d}];"));
-                self.line(format!("sw[{l}] = vec3<f32>(0.0);"));
-                self.line(format!("su[{l}] = axis_w;"));
-            } else {
-                self.line(format!(
-                    "rot = qmul(rot, qaxis({}, q[{d}]));",
-                    v3(link.axis)
-                ));
-                self.line(format!("sw[{l}] = axis_w;"));
-                self.line(format!("su[{l}] = cross(pos, axis_w);"));
-            }
-            self.line(format!("lpos[{l}] = pos;"));
-            self.line(format!("lrot[{l}] = rot;"));
-            self.line(format!("vw[{l}] = vw[{p}] + sw[{l}] * qd[{d}];"));
-            self.line(format!("vu[{l}] = vu[{p}] + su[{l}] * qd[{d}];"));
+            let (opos, orot, axis) = (v3(link.origin.pos), q4(link.origin.rot), v3(link.axis));
+            self.joint_link_kinematics(
+                &l.to_string(),
+                [
+                    &format!("lpos[{p}]"),
+                    &format!("lrot[{p}]"),
+                    &format!("vw[{p}]"),
+                    &format!("vu[{p}]"),
+                ],
+                (&opos, &orot, &axis),
+                link.kind == JointKind::Prismatic,
+                (&format!("q[{d}]"), &format!("qd[{d}]")),
+            );
             self.spatial_inertia(l);
             self.close();
         }
@@ -119,20 +108,10 @@ impl Gen<'_> {
     fn spatial_inertia(&mut self, l: usize) {
         self.line("// Spatial inertia at the env origin.");
         let i = &self.scene.links[l].inertial;
+        let (mass, com, inertia) = (f(i.mass), v3(i.com), m3(i.inertia));
         self.line(format!("let s = mscale[{l}];"));
-        self.line(format!("let m = {} * s;", f(i.mass)));
-        self.line(format!("let c = pos + qrot(rot, {});", v3(i.com)));
-        self.line("let r = qmat(rot);");
-        self.line(format!(
-            "let ic = r * ({} * s) * transpose(r);",
-            m3(i.inertia)
-        ));
-        self.line("let cc = dot(c, c);");
-        self.line(format!("im[{l}] = m;"));
-        self.line(format!("ih[{l}] = m * c;"));
-        self.line(format!(
-            "ij[{l}] = ic + m * (mat3x3<f32>(cc, 0.0, 0.0, 0.0, cc, 0.0, 0.0, 0.0, cc) - outer(c, c));"
-        ));
+        let dst = [format!("im[{l}]"), format!("ih[{l}]"), format!("ij[{l}]")];
+        self.spatial_inertia_at("s", &mass, &com, &inertia, [&dst[0], &dst[1], &dst[2]]);
     }
 
     /// Links with inertia that moves (all but fixed roots), parents first, with their parent
@@ -169,25 +148,15 @@ impl Gen<'_> {
                     None => ("vec3<f32>(0.0)".into(), "-GRAVITY".into()),
                 };
                 self.line("// (v × S) q̇ with the motion cross product; f = I a + v ×* (I v).");
-                self.line(format!(
-                    "let aw{l} = {aw0} + cross(vw[{l}], sw[{l}]) * qd[{d}];"
-                ));
-                self.line(format!(
-                    "let au{l} = {au0} + (cross(vw[{l}], su[{l}]) + cross(vu[{l}], sw[{l}])) * qd[{d}];"
-                ));
+                self.joint_acceleration(
+                    &l.to_string(),
+                    &l.to_string(),
+                    (&aw0, &au0),
+                    &format!("qd[{d}]"),
+                );
             }
-            self.line(format!(
-                "let ivw{l} = ij[{l}] * vw[{l}] + cross(ih[{l}], vu[{l}]);"
-            ));
-            self.line(format!(
-                "let ivu{l} = im[{l}] * vu[{l}] - cross(ih[{l}], vw[{l}]);"
-            ));
-            self.line(format!(
-                "var fw{l} = ij[{l}] * aw{l} + cross(ih[{l}], au{l}) + cross(vw[{l}], ivw{l}) + cross(vu[{l}], ivu{l});"
-            ));
-            self.line(format!(
-                "var fu{l} = im[{l}] * au{l} - cross(ih[{l}], aw{l}) + cross(vw[{l}], ivu{l});"
-            ));
+            let at = |x: &str| format!("{x}[{l}]");
+            self.link_force(&l.to_string(), &at);
         }
         for (l, p, dofs) in moving.iter().rev() {
             for &d in dofs {
@@ -299,44 +268,25 @@ impl Gen<'_> {
     /// straight-line code.
     fn dense_cholesky(&mut self) {
         let nd = self.nd();
-        let at = |i: usize, j: usize| format!("amat[{}]", i * nd + j);
+        let block = |d: usize| self.dof_block(d);
+        let chol = DenseCholesky {
+            m: "amat",
+            inv: "linv",
+            n: nd,
+            block: &block,
+        };
+        let (factor, solve) = (chol.factor_lines(), chol.solve_lines());
         self.line("// In-place Cholesky factorisation A = L Lᵀ of each articulation's block (lower triangle of amat).");
         self.open("fn cholesky()");
-        for j in 0..nd {
-            let (d0, n) = self.dof_block(j);
-            let mut s = at(j, j);
-            for k in d0..j {
-                write!(s, " - {} * {}", at(j, k), at(j, k)).expect("write to string");
-            }
-            self.line(format!("{} = sqrt(max({s}, 1e-12));", at(j, j)));
-            self.line(format!("linv[{j}] = 1.0 / {};", at(j, j)));
-            for i in j + 1..d0 + n {
-                let mut t = at(i, j);
-                for k in d0..j {
-                    write!(t, " - {} * {}", at(i, k), at(j, k)).expect("write to string");
-                }
-                self.line(format!("{} = ({t}) * linv[{j}];", at(i, j)));
-            }
+        for line in factor {
+            self.line(line);
         }
         self.close();
         self.line("");
         self.line("// Solves A x = b in place with the Cholesky factor.");
         self.open("fn chol_solve(b: ptr<function, array<f32, ND1>>)");
-        for i in 0..nd {
-            let (d0, _) = self.dof_block(i);
-            let mut t = format!("(*b)[{i}]");
-            for k in d0..i {
-                write!(t, " - {} * (*b)[{k}]", at(i, k)).expect("write to string");
-            }
-            self.line(format!("(*b)[{i}] = ({t}) * linv[{i}];"));
-        }
-        for i in (0..nd).rev() {
-            let (d0, n) = self.dof_block(i);
-            let mut t = format!("(*b)[{i}]");
-            for k in i + 1..d0 + n {
-                write!(t, " - {} * (*b)[{k}]", at(k, i)).expect("write to string");
-            }
-            self.line(format!("(*b)[{i}] = ({t}) * linv[{i}];"));
+        for line in solve {
+            self.line(line);
         }
         self.close();
         self.line("");
@@ -474,60 +424,18 @@ impl Gen<'_> {
                 self.line(format!("dv[{d}] = -DT * bias[{d}];"));
                 continue;
             }
-            let (k, dd, lim, damp) = (
-                dof.stiffness,
-                dof.drive_damping,
-                dof.effort_limit,
-                dof.damping,
-            );
-            let diag = format!("amat[{}]", d * nd + d);
+            let terms = DriveTerms {
+                k: f(dof.stiffness),
+                dd: f(dof.drive_damping),
+                lim: f(dof.effort_limit),
+                neg_lim: f(-dof.effort_limit),
+                dd_damp: f(dof.drive_damping + dof.damping),
+                damp: f(dof.damping),
+                driven: dof.stiffness > 0.0 || dof.drive_damping > 0.0,
+                damped: dof.damping != 0.0,
+            };
             self.open("");
-            self.line(format!("var ef = in_ef[{d}];"));
-            self.line(format!("if in_comp[{d}] {{ ef += bias[{d}]; }}"));
-            if k > 0.0 || dd > 0.0 {
-                self.line(format!("let qt = in_qt[{d}];"));
-                self.line(format!("let vt = in_vt[{d}];"));
-                self.line(format!(
-                    "let pd = {} * (qt - q[{d}]) + {} * (vt - qd[{d}]);",
-                    f(k),
-                    f(dd)
-                ));
-                self.line("var tau: f32;");
-                self.line("// Implicit while the drive stays inside its effort limit.");
-                self.open(format!("if abs(pd + ef) <= {}", f(lim)));
-                self.line(format!(
-                    "tau = ef + {} * (qt - q[{d}] - DT * qd[{d}]) + {} * (vt - qd[{d}]);",
-                    f(k),
-                    f(dd)
-                ));
-                self.line(format!(
-                    "{diag} = {diag} + DT * {} + DT * DT * {};",
-                    f(dd + damp),
-                    f(k)
-                ));
-                self.close();
-                self.open("else");
-                self.line(format!("tau = clamp(pd + ef, {}, {});", f(-lim), f(lim)));
-                if damp != 0.0 {
-                    self.line(format!("{diag} = {diag} + DT * {};", f(damp)));
-                }
-                self.close();
-                self.line(format!(
-                    "applied[{d}] = clamp(pd + ef, {}, {});",
-                    f(-lim),
-                    f(lim)
-                ));
-            } else {
-                self.line(format!("let tau = clamp(ef, {}, {});", f(-lim), f(lim)));
-                self.line(format!("applied[{d}] = tau;"));
-                if damp != 0.0 {
-                    self.line(format!("{diag} = {diag} + DT * {};", f(damp)));
-                }
-            }
-            self.line(format!(
-                "dv[{d}] = DT * (tau - {} * qd[{d}] - bias[{d}]);",
-                f(damp)
-            ));
+            self.drive_lines(&d.to_string(), &format!("amat[{}]", d * nd + d), &terms);
             self.close();
         }
         self.line("cholesky();");

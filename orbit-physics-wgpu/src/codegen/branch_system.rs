@@ -5,7 +5,9 @@
 use std::fmt::Write as _;
 
 use super::branch_threads::Branches;
+use super::emitters::{DenseCholesky, DriveTerms};
 use super::{Gen, f, v3};
+use crate::compile::DofData;
 use crate::weights::InverseWeights;
 
 impl Gen<'_> {
@@ -46,46 +48,21 @@ impl Gen<'_> {
         self.open("fn drives()");
         self.line("var dv: array<f32, NCH>;");
         for j in 0..n {
-            let (k, dd, lim, damp) = (
-                self.lane_dof_f(br, j, |d| dofs[d].stiffness),
-                self.lane_dof_f(br, j, |d| dofs[d].drive_damping),
-                self.lane_dof_f(br, j, |d| dofs[d].effort_limit),
-                self.lane_dof_f(br, j, |d| dofs[d].damping),
-            );
-            let drive = self.any_dof(br, j, |d| {
-                dofs[d].stiffness > 0.0 || dofs[d].drive_damping > 0.0
-            });
-            let diag = format!("abb[{}]", j * n + j);
+            let lane = |v: &dyn Fn(&DofData) -> f32| self.lane_dof_f(br, j, |d| v(&dofs[d]));
+            let terms = DriveTerms {
+                k: lane(&|d| d.stiffness),
+                dd: lane(&|d| d.drive_damping),
+                lim: lane(&|d| d.effort_limit),
+                neg_lim: lane(&|d| -d.effort_limit),
+                dd_damp: lane(&|d| d.drive_damping + d.damping),
+                damp: lane(&|d| d.damping),
+                driven: self.any_dof(br, j, |d| {
+                    dofs[d].stiffness > 0.0 || dofs[d].drive_damping > 0.0
+                }),
+                damped: self.any_dof(br, j, |d| dofs[d].damping != 0.0),
+            };
             self.open("");
-            self.line(format!("var ef = in_ef[{j}];"));
-            self.line(format!("if in_comp[{j}] {{ ef += bias[{j}]; }}"));
-            if drive {
-                self.line(format!(
-                    "let pd = {k} * (in_qt[{j}] - q[{j}]) + {dd} * (in_vt[{j}] - qd[{j}]);"
-                ));
-                self.line("var tau: f32;");
-                self.open(format!("if abs(pd + ef) <= {lim}"));
-                self.line(format!(
-                    "tau = ef + {k} * (in_qt[{j}] - q[{j}] - DT * qd[{j}]) + {dd} * (in_vt[{j}] - qd[{j}]);"
-                ));
-                self.line(format!(
-                    "{diag} = {diag} + DT * ({dd} + {damp}) + DT * DT * {k};"
-                ));
-                self.reopen("else");
-                self.line(format!("tau = clamp(pd + ef, -{lim}, {lim});"));
-                self.line(format!("{diag} = {diag} + DT * {damp};"));
-                self.close();
-                self.line(format!("applied[{j}] = clamp(pd + ef, -{lim}, {lim});"));
-            } else {
-                self.line(format!("let tau = clamp(ef, -{lim}, {lim});"));
-                self.line(format!("applied[{j}] = tau;"));
-                if self.any_dof(br, j, |d| dofs[d].damping != 0.0) {
-                    self.line(format!("{diag} = {diag} + DT * {damp};"));
-                }
-            }
-            self.line(format!(
-                "dv[{j}] = DT * (tau - {damp} * qd[{j}] - bias[{j}]);"
-            ));
+            self.drive_lines(&j.to_string(), &format!("abb[{}]", j * n + j), &terms);
             self.close();
         }
         self.line("var dr: array<f32, 6>;");
@@ -115,46 +92,23 @@ impl Gen<'_> {
         self.line("");
     }
 
-    /// Emits an in-place Cholesky factorisation of the `n × n` lower triangle in `m` (row
-    /// stride `n`) with inverse diagonal `inv`, and its solve `name(b)`.
-    fn dense_factor(&mut self, m: &str, inv: &str, n: usize) -> String {
-        let at = |i: usize, j: usize| format!("{m}[{}]", i * n + j);
-        let mut body = String::new();
-        for j in 0..n {
-            let mut s = at(j, j);
-            for k in 0..j {
-                write!(s, " - {} * {}", at(j, k), at(j, k)).expect("write to string");
-            }
-            writeln!(body, "{} = sqrt(max({s}, 1e-12));", at(j, j)).expect("write to string");
-            writeln!(body, "{inv}[{j}] = 1.0 / {};", at(j, j)).expect("write to string");
-            for i in j + 1..n {
-                let mut t = at(i, j);
-                for k in 0..j {
-                    write!(t, " - {} * {}", at(i, k), at(j, k)).expect("write to string");
-                }
-                writeln!(body, "{} = ({t}) * {inv}[{j}];", at(i, j)).expect("write to string");
-            }
-        }
-        body
+    /// A dense Cholesky factorisation of the `n × n` system in `m` (one block).
+    fn dense(m: &'static str, inv: &'static str, n: usize) -> (Vec<String>, Vec<String>) {
+        let block = move |_| (0, n);
+        let chol = DenseCholesky {
+            m,
+            inv,
+            n,
+            block: &block,
+        };
+        (chol.factor_lines(), chol.solve_lines())
     }
 
-    /// Emits `fn name(b)`: solves with the factor in `m` of an `n × n` system in place.
-    fn dense_solve(&mut self, name: &str, m: &str, inv: &str, n: usize, len: &str) {
-        let at = |i: usize, j: usize| format!("{m}[{}]", i * n + j);
+    /// Emits `fn name(b)`: `lines` solving an `n`-vector in place.
+    fn solve_fn(&mut self, name: &str, len: &str, lines: Vec<String>) {
         self.open(format!("fn {name}(b: ptr<function, array<f32, {len}>>)"));
-        for i in 0..n {
-            let mut t = format!("(*b)[{i}]");
-            for k in 0..i {
-                write!(t, " - {} * (*b)[{k}]", at(i, k)).expect("write to string");
-            }
-            self.line(format!("(*b)[{i}] = ({t}) * {inv}[{i}];"));
-        }
-        for i in (0..n).rev() {
-            let mut t = format!("(*b)[{i}]");
-            for k in i + 1..n {
-                write!(t, " - {} * (*b)[{k}]", at(k, i)).expect("write to string");
-            }
-            self.line(format!("(*b)[{i}] = ({t}) * {inv}[{i}];"));
+        for line in lines {
+            self.line(line);
         }
         self.close();
         self.line("");
@@ -165,7 +119,9 @@ impl Gen<'_> {
         let bm = Self::masked(br);
         self.line("// Factorises A_bb, forms C_b and the Schur complement S, and factorises S.");
         self.open("fn factor()");
-        for line in self.dense_factor("abb", "abb_inv", n).lines() {
+        let (b_factor, b_solve) = Self::dense("abb", "abb_inv", n);
+        let (s_factor, s_solve) = Self::dense("sm", "sm_inv", 6);
+        for line in b_factor {
             self.line(line);
         }
         for k in 0..6 {
@@ -188,13 +144,13 @@ impl Gen<'_> {
                 self.line(format!("sm[{}] += quad_sum((0.0{t}){bm});", a * 6 + b));
             }
         }
-        for line in self.dense_factor("sm", "sm_inv", 6).lines() {
+        for line in s_factor {
             self.line(line);
         }
         self.close();
         self.line("");
-        self.dense_solve("b_solve", "abb", "abb_inv", n, "NCH");
-        self.dense_solve("s_solve", "sm", "sm_inv", 6, "6");
+        self.solve_fn("b_solve", "NCH", b_solve);
+        self.solve_fn("s_solve", "6", s_solve);
     }
 
     pub(super) fn branch_limit_rows(&mut self, br: &Branches) {

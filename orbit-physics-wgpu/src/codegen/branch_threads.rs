@@ -6,10 +6,9 @@
 //!
 //! [`KernelForm::ThreadPerBranch`]: super::KernelForm::ThreadPerBranch
 
-use glam::Vec3;
 use orbit_core::scene::JointKind;
 
-use super::{Gen, f, m3, q4, v3};
+use super::{Gen, f, m3, q4, root_motion, v3};
 use crate::compile::{self, CompiledScene, MAX_CONTACTS};
 
 /// At most this many branches: the lanes of a quad.
@@ -105,17 +104,6 @@ impl Branches {
     /// Links (and dofs) per chain.
     pub fn chain_len(&self) -> usize {
         self.chains[0].len()
-    }
-}
-
-/// Root dof `k`'s motion subspace as WGSL `(angular, linear)`: a unit translation of the root's
-/// centre of mass along env axis `k`, or a unit rotation about it about axis `k − 3`.
-pub(super) fn root_motion(k: usize) -> (String, String) {
-    let e = v3(Vec3::AXES[k % 3]);
-    if k < 3 {
-        ("vec3<f32>(0.0)".into(), e)
-    } else {
-        (e.clone(), format!("cross(fcom, {e})"))
     }
 }
 
@@ -222,31 +210,6 @@ impl Gen<'_> {
         self.line("");
     }
 
-    /// Emits the spatial inertia at the kernel origin of a body at `pos`, `rot` (in scope)
-    /// into `dm`, `dh`, `dj`.
-    fn branch_inertia(
-        &mut self,
-        scale: &str,
-        mass: &str,
-        com: &str,
-        inertia: &str,
-        dst: [&str; 3],
-    ) {
-        self.line(format!("let m = {mass} * {scale};"));
-        self.line(format!("let c = pos + qrot(rot, {com});"));
-        self.line("let r = qmat(rot);");
-        self.line(format!(
-            "let ic = r * ({inertia} * {scale}) * transpose(r);"
-        ));
-        self.line("let cc = dot(c, c);");
-        self.line(format!("{} = m;", dst[0]));
-        self.line(format!("{} = m * c;", dst[1]));
-        self.line(format!(
-            "{} = ic + m * (mat3x3<f32>(cc, 0.0, 0.0, 0.0, cc, 0.0, 0.0, 0.0, cc) - outer(c, c));",
-            dst[2]
-        ));
-    }
-
     fn branch_kinematics(&mut self, br: &Branches) {
         let s = self.scene;
         let root = &s.links[br.root];
@@ -263,7 +226,7 @@ impl Gen<'_> {
         self.line("rvu = rv + cross(fcom, rvw);");
         let i = &root.inertial;
         let (mass, com, inertia) = (f(i.mass), v3(i.com), m3(i.inertia));
-        self.branch_inertia("rms", &mass, &com, &inertia, ["rim", "rih", "rij"]);
+        self.spatial_inertia_at("rms", &mass, &com, &inertia, ["rim", "rih", "rij"]);
         self.close();
         for k in 0..br.chain_len() {
             let (pp, pr, pw, pu) = if k == 0 {
@@ -281,23 +244,15 @@ impl Gen<'_> {
             let orot = self.per_lane(br, k, |l| q4(s.links[l].origin.rot));
             let axis = self.per_lane(br, k, |l| v3(s.links[l].axis));
             self.open("");
-            self.line(format!("var pos = {pp} + qrot({pr}, {opos});"));
-            self.line(format!("var rot = qmul({pr}, {orot});"));
             self.line(format!("let axis = {axis};"));
-            self.line("let axis_w = qrot(rot, axis);");
-            if s.links[br.chains[0][k]].kind == JointKind::Prismatic {
-                self.line(format!("pos = pos + axis_w * q[{k}];"));
-                self.line(format!("sw[{k}] = vec3<f32>(0.0);"));
-                self.line(format!("su[{k}] = axis_w;"));
-            } else {
-                self.line(format!("rot = qmul(rot, qaxis(axis, q[{k}]));"));
-                self.line(format!("sw[{k}] = axis_w;"));
-                self.line(format!("su[{k}] = cross(pos, axis_w);"));
-            }
-            self.line(format!("lpos[{k}] = pos;"));
-            self.line(format!("lrot[{k}] = rot;"));
-            self.line(format!("vw[{k}] = {pw} + sw[{k}] * qd[{k}];"));
-            self.line(format!("vu[{k}] = {pu} + su[{k}] * qd[{k}];"));
+            let prismatic = s.links[br.chains[0][k]].kind == JointKind::Prismatic;
+            self.joint_link_kinematics(
+                &k.to_string(),
+                [&pp, &pr, &pw, &pu],
+                (&opos, &orot, "axis"),
+                prismatic,
+                (&format!("q[{k}]"), &format!("qd[{k}]")),
+            );
             let mass = self.per_lane(br, k, |l| f(s.links[l].inertial.mass));
             let com = self.per_lane(br, k, |l| v3(s.links[l].inertial.com));
             // `select` takes no matrices: a matrix of per-lane columns.
@@ -305,7 +260,7 @@ impl Gen<'_> {
                 |c: usize| self.per_lane(br, k, |l| v3(s.links[l].inertial.inertia.col(c)));
             let inertia = format!("mat3x3<f32>({}, {}, {})", column(0), column(1), column(2));
             let dst = [format!("im[{k}]"), format!("ih[{k}]"), format!("ij[{k}]")];
-            self.branch_inertia(
+            self.spatial_inertia_at(
                 &format!("ms[{k}]"),
                 &mass,
                 &com,
@@ -323,36 +278,19 @@ impl Gen<'_> {
         let bm = Self::masked(br);
         self.line("// Bias forces c(q, q̇) by recursive Newton–Euler with q̈ = 0 (gravity as a base acceleration).");
         self.open("fn rnea_bias()");
-        self.line("let aw = vec3<f32>(0.0);");
-        self.line("let au = -GRAVITY + cross(rv, rvw);");
-        self.line("let ivw = rij * rvw + cross(rih, rvu);");
-        self.line("let ivu = rim * rvu - cross(rih, rvw);");
-        self.line("let fw = rij * aw + cross(rih, au) + cross(rvw, ivw) + cross(rvu, ivu);");
-        self.line("let fu = rim * au - cross(rih, aw) + cross(rvw, ivu);");
+        self.line("let awr = vec3<f32>(0.0);");
+        self.line("let aur = -GRAVITY + cross(rv, rvw);");
+        self.link_force("r", &|x: &str| format!("r{x}"));
         for k in 0..n {
-            let (aw0, au0) = if k == 0 {
-                ("aw".to_string(), "au".to_string())
+            let parent = if k == 0 {
+                "r".to_string()
             } else {
-                (format!("aw{}", k - 1), format!("au{}", k - 1))
+                (k - 1).to_string()
             };
-            self.line(format!(
-                "let aw{k} = {aw0} + cross(vw[{k}], sw[{k}]) * qd[{k}];"
-            ));
-            self.line(format!(
-                "let au{k} = {au0} + (cross(vw[{k}], su[{k}]) + cross(vu[{k}], sw[{k}])) * qd[{k}];"
-            ));
-            self.line(format!(
-                "let ivw{k} = ij[{k}] * vw[{k}] + cross(ih[{k}], vu[{k}]);"
-            ));
-            self.line(format!(
-                "let ivu{k} = im[{k}] * vu[{k}] - cross(ih[{k}], vw[{k}]);"
-            ));
-            self.line(format!(
-                "var fw{k} = ij[{k}] * aw{k} + cross(ih[{k}], au{k}) + cross(vw[{k}], ivw{k}) + cross(vu[{k}], ivu{k});"
-            ));
-            self.line(format!(
-                "var fu{k} = im[{k}] * au{k} - cross(ih[{k}], aw{k}) + cross(vw[{k}], ivu{k});"
-            ));
+            let (aw0, au0) = (format!("aw{parent}"), format!("au{parent}"));
+            let (kn, qd) = (k.to_string(), format!("qd[{k}]"));
+            self.joint_acceleration(&kn, &kn, (&aw0, &au0), &qd);
+            self.link_force(&kn, &|x: &str| format!("{x}[{k}]"));
         }
         for k in (0..n).rev() {
             self.line(format!(
@@ -364,10 +302,10 @@ impl Gen<'_> {
             }
         }
         self.line("// The root's force: its own and its branches', summed in lane order.");
-        self.line(format!("let tw = fw + quad_sum3(fw0{bm});"));
-        self.line(format!("let tu = fu + quad_sum3(fu0{bm});"));
+        self.line(format!("let tw = fwr + quad_sum3(fw0{bm});"));
+        self.line(format!("let tu = fur + quad_sum3(fu0{bm});"));
         for k in 0..6 {
-            let (sw, su) = root_motion(k);
+            let (sw, su) = root_motion(k, "fcom");
             self.line(format!("rbias[{k}] = dot({sw}, tw) + dot({su}, tu);"));
         }
         self.close();
@@ -400,12 +338,12 @@ impl Gen<'_> {
             "let cj = rij + mat3x3<f32>(quad_sum3(cj0[0]{bm}), quad_sum3(cj0[1]{bm}), quad_sum3(cj0[2]{bm}));"
         ));
         for b in 0..6 {
-            let (sw, su) = root_motion(b);
+            let (sw, su) = root_motion(b, "fcom");
             self.open("");
             self.line(format!("let fw = cj * {sw} + cross(ch, {su});"));
             self.line(format!("let fu = cm * {su} - cross(ch, {sw});"));
             for a in b..6 {
-                let (swa, sua) = root_motion(a);
+                let (swa, sua) = root_motion(a, "fcom");
                 self.line(format!(
                     "sm[{}] = dot({swa}, fw) + dot({sua}, fu);",
                     a * 6 + b
@@ -424,7 +362,7 @@ impl Gen<'_> {
                 ));
             }
             for k in 0..6 {
-                let (swk, suk) = root_motion(k);
+                let (swk, suk) = root_motion(k, "fcom");
                 self.line(format!("abr[{j}][{k}] = dot({swk}, fw) + dot({suk}, fu);"));
             }
             let arm = self.per_lane(br, j, |l| {

@@ -23,6 +23,7 @@ mod branch_system;
 mod branch_threads;
 mod constants;
 mod constraints;
+mod emitters;
 
 pub(crate) use constraints::row_storage_floats;
 mod integrate;
@@ -250,15 +251,10 @@ impl Gen<'_> {
         let Some(axis) = self.scene.dofs[d].root_axis else {
             return (format!("sw[{l}]"), format!("su[{l}]"));
         };
-        let e = v3(Vec3::AXES[axis % 3]);
-        if axis < 3 {
-            ("vec3<f32>(0.0)".into(), e)
-        } else {
-            let root = self.scene.links[l]
-                .free_root
-                .expect("a root dof's link is a floating root");
-            (e.clone(), format!("cross(fcom[{}], {e})", root.index))
-        }
+        let root = self.scene.links[l]
+            .free_root
+            .expect("a root dof's link is a floating root");
+        root_motion(axis, &format!("fcom[{}]", root.index))
     }
 
     /// The link that dof `d` moves: its joint's child link, or the floating root whose six
@@ -282,6 +278,18 @@ impl Gen<'_> {
         let r = root.dof0;
         let v = |k: usize| format!("vec3<f32>(qd[{k}], qd[{}], qd[{}])", k + 1, k + 2);
         (v(r), v(r + 3))
+    }
+}
+
+/// Root dof `axis`'s motion subspace as WGSL `(angular, linear)`: a unit translation of the
+/// root's centre of mass `fcom` along env axis `axis` (0–2), or a unit rotation about it about
+/// env axis `axis − 3`.
+fn root_motion(axis: usize, fcom: &str) -> (String, String) {
+    let e = v3(Vec3::AXES[axis % 3]);
+    if axis < 3 {
+        ("vec3<f32>(0.0)".into(), e)
+    } else {
+        (e.clone(), format!("cross({fcom}, {e})"))
     }
 }
 
@@ -439,7 +447,7 @@ mod tests {
         assert!(src.contains(
             "select(select(select(6u, 8u, lane == 1u), 10u, lane == 2u), 12u, lane == 3u)"
         ));
-        assert!(src.contains("let tw = fw + quad_sum3(fw0);"));
+        assert!(src.contains("let tw = fwr + quad_sum3(fw0);"));
         // On the ground each lane tests its leg's shapes (and lane 0 the torso's) against it.
         let ground = SceneCfg {
             static_objects: vec![orbit_conformance::ground(1.0)],

@@ -41,14 +41,7 @@ fn substep() {
     collide();
     build_contacts();
     limit_rows();
-    warm_start();
-    solve(ITERATIONS);
-    integrate();
-    if SOFT_STEP {
-        relax_rows();
-        solve(ITERATIONS);
-    }
-    store_warm();
+    solve_and_integrate();
 }
 
 @compute @workgroup_size(WORKGROUP)

@@ -18,3 +18,17 @@ fn run_env() {
     }
     publish();
 }
+
+// A substep's constraints and integration, once its rows are built: warm starts, the sweeps,
+// velocity limits and integration, the soft step's relaxation sweeps, and the impulses kept
+// for the next substep's warm start.
+fn solve_and_integrate() {
+    warm_start();
+    solve(ITERATIONS);
+    integrate();
+    if SOFT_STEP {
+        relax_rows();
+        solve(ITERATIONS);
+    }
+    store_warm();
+}

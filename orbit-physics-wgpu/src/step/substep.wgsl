@@ -11,14 +11,7 @@ fn substep() {
     objects_free_velocity();
     collide();
     build_rows();
-    warm_start();
-    solve(ITERATIONS);
-    integrate();
-    if SOFT_STEP {
-        relax_rows();
-        solve(ITERATIONS);
-    }
-    store_warm();
+    solve_and_integrate();
 }
 
 @compute @workgroup_size(WORKGROUP)
