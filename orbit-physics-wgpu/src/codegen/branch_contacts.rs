@@ -44,20 +44,22 @@ impl Gen<'_> {
             "// A contact's slot (k_ for the first, in registers; kx_ for the others, at their",
         );
         self.line(
-            "// index): root factor (side a moving minus side b moving), lever from the root's",
+            "// index): its frame (normal, tangents) times the root factor (side a moving minus",
         );
         self.line(
-            "// centre of mass, normal, friction, warm-start slot; its rows 3c + d: the chain's",
+            "// side b moving), lever from the root's centre of mass, friction, warm-start slot;",
         );
+        self.line("// its rows 3c + d: the chain's");
         self.line("// Jacobian entries and W's root and chain parts; effective masses, targets, the normal");
         self.line("// row's regulariser and the impulses.");
         for (p, len) in [("k_", "1"), ("kx_", "CX")] {
-            for v in ["f", "mu", "r"] {
+            for v in ["mu", "r"] {
                 self.line(format!("var<private> {p}{v}: array<f32, {len}>;"));
             }
-            for v in ["lv", "nrm", "meff", "tgt", "lam"] {
+            for v in ["lv", "meff", "tgt", "lam"] {
                 self.line(format!("var<private> {p}{v}: array<vec3<f32>, {len}>;"));
             }
+            self.line(format!("var<private> {p}fb: array<mat3x3<f32>, {len}>;"));
             self.line(format!("var<private> {p}slot: array<u32, {len}>;"));
             self.line(format!(
                 "var<private> {p}jb: array<array<f32, NCH>, 3 * {len}>;"
@@ -137,9 +139,9 @@ impl Gen<'_> {
         self.line("let lever = p - fcom;");
         self.line("let sa = body_slot(ba);");
         self.line("let sb = body_slot(bb);");
-        self.line(format!("{p}f[{c}] = f;"));
+        // f is ±1: the sweeps' products with the scaled frame round as with f applied after.
+        self.line(format!("{p}fb[{c}] = f * basis;"));
         self.line(format!("{p}lv[{c}] = lever;"));
-        self.line(format!("{p}nrm[{c}] = c_n[{c}];"));
         self.line(format!("{p}mu[{c}] = c_mu[{c}];"));
         self.line(format!("{p}slot[{c}] = c_slot[{c}];"));
         self.line("var a = vec3<f32>(0.0);");
@@ -216,15 +218,14 @@ impl Gen<'_> {
                 .collect()
         };
         let (wr, wb) = (format!("{p}wr"), format!("{p}wb"));
-        self.line(format!("let basis = contact_basis({p}nrm[{c}]);"));
+        self.line(format!("let basis = {p}fb[{c}];"));
         self.line(format!("let lam = {p}lam[{c}];"));
         self.line(format!("let meff = {p}meff[{c}];"));
         self.line(format!("let tgt = {p}tgt[{c}];"));
         self.line(format!("let r = {p}r[{c}];"));
-        self.line(format!("let fk = {p}f[{c}];"));
         self.line(format!("let lever = {p}lv[{c}];"));
         self.line(format!(
-            "let jn = dot(fk * (rv + cross(rw, lever)), basis[0]){};",
+            "let jn = dot(rv + cross(rw, lever), basis[0]){};",
             jq(0)
         ));
         self.line("let ln = normal_impulse(lam.x, jn, tgt.x, r, meff.x);");
@@ -234,7 +235,7 @@ impl Gen<'_> {
         self.line(format!("let lim = {p}mu[{c}] * ln;"));
         self.line("var lt = vec2<f32>(0.0);");
         self.open("if lim > 0.0");
-        self.line("let v = fk * (rv + cross(rw, lever));");
+        self.line("let v = rv + cross(rw, lever);");
         self.line(format!(
             "let jt = vec2<f32>(dot(v, basis[1]){}, dot(v, basis[2]){});",
             jq(1),
@@ -256,18 +257,24 @@ impl Gen<'_> {
     }
 
     /// Emits the warm start of this lane's contacts: the entry among its own with the same
-    /// slot and a normal impulse.
+    /// slot (an entry's slot is unique), if it has a normal impulse.
     pub(super) fn branch_contact_warm(&mut self, br: &Branches) {
+        if br.contact_slots == 0 {
+            return;
+        }
+        // All slots first, as independent loads: a search that loads as it compares waits for
+        // each load in turn.
+        self.line("var wslot: array<u32, C_CAP>;");
+        self.open("for (var i = 0u; i < C_CAP; i++)");
+        self.line("wslot[i] = bitcast<u32>(warm[warm_addr(lane * WARM_LANE + i, 0u)]);");
+        self.close();
         self.each_contact(br, |g, p, c| {
             g.line("var found = C_CAP;");
             g.open("for (var i = 0u; i < C_CAP; i++)");
-            g.line("let k = lane * WARM_LANE + i;");
-            g.line(format!(
-                "if found == C_CAP && bitcast<u32>(warm[warm_addr(k, 0u)]) == {p}slot[{c}] && warm[warm_addr(k, 1u)] != 0.0 {{ found = i; }}"
-            ));
+            g.line(format!("if wslot[i] == {p}slot[{c}] {{ found = i; }}"));
             g.close();
-            g.open("if found != C_CAP");
             g.line("let k = lane * WARM_LANE + found;");
+            g.open("if found != C_CAP && warm[warm_addr(k, 1u)] != 0.0");
             g.line(
                 "let lam = vec3<f32>(warm[warm_addr(k, 1u)], warm[warm_addr(k, 2u)], warm[warm_addr(k, 3u)]);",
             );

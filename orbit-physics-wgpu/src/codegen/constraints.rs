@@ -53,6 +53,13 @@ impl Gen<'_> {
         c(self, "GEO_GROUPS", geo.groups);
         c(self, "GEO_PAIRS", geo.pairs);
         c(self, "NG", geo.num_groups);
+        // The narrow phase's cases for kinds of pairs the scene lacks compile to nothing: a
+        // smaller kernel runs faster where one thread's latency sets the step.
+        let s = self.scene;
+        let kinds = s.pairs.iter().fold(0u32, |m, p| {
+            m | 1 << (s.shapes[p.a].kind.code() * 4 + s.shapes[p.b].kind.code())
+        });
+        self.line(format!("const PAIR_KINDS = {kinds:#x}u;"));
     }
 
     /// Row Jacobians of points on links, and the arm parts of the rows.

@@ -379,6 +379,8 @@ mod tests {
         assert!(!src.contains("link_parent") && src.contains("lpos[7]"));
         // A serial chain: the dense Cholesky factorisation.
         assert!(src.contains("amat[0] = sqrt(max(amat[0], 1e-12));"));
+        // Capsule fingers against the box, the box against the table: codes 6 and 10.
+        assert!(src.contains("const PAIR_KINDS = 0x440u;"));
         // No floating root: the rows store every entry.
         assert!(src.contains("const NJ = 7u;") && src.contains("return vec3<f32>(0.0);"));
     }
@@ -459,6 +461,8 @@ mod tests {
         // Its contacts' visits sit in one loop over the legs' turns.
         let src = validate_form(&scene, KernelForm::ThreadPerBranch);
         assert!(src.contains("for (var t = 0u; t < NBR; t++)"));
+        // Of the narrow phase's cases only sphere–plane (3) and capsule–plane (7) are live.
+        assert!(src.contains("const PAIR_KINDS = 0x88u;"));
     }
 
     /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.

@@ -301,6 +301,12 @@ fn boxes_near(apos: vec3<f32>, arot: vec4<f32>, asize: vec3<f32>, bpos: vec3<f32
     return all(abs(ta) <= asize + eb + vec3<f32>(MARGIN)) && all(abs(tb) <= bsize + ea + vec3<f32>(MARGIN));
 }
 
+// Whether the scene has a pair of kind code `code` (a's kind × 4 + b's): the cases of the others
+// are constant-false.
+fn has_pair_kind(code: u32) -> bool {
+    return (PAIR_KINDS & (1u << code)) != 0u;
+}
+
 // The contacts of pair k (shapes a and b, a's kind code not above b's; a is at `pa` and
 // has passed the test against the group's second side).
 fn collide_pair(k: u32, pa: ShapePose) {
@@ -338,37 +344,55 @@ fn collide_pair(k: u32, pa: ShapePose) {
     }
     switch u32(ia.x) * 4u + u32(ib.x) {
         case 0u: {
-            point_contact(closest_sphere(pb.pos, sb.x, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            if has_pair_kind(0u) {
+                point_contact(closest_sphere(pb.pos, sb.x, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            }
         }
         case 1u: {
-            point_contact(closest_capsule(pb.pos, pb.rot, sb.x, sb.y, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            if has_pair_kind(1u) {
+                point_contact(closest_capsule(pb.pos, pb.rot, sb.x, sb.y, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            }
         }
         case 2u: {
-            point_contact(closest_box(pb.pos, pb.rot, sb.xyz, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            if has_pair_kind(2u) {
+                point_contact(closest_box(pb.pos, pb.rot, sb.xyz, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            }
         }
         case 3u: {
-            point_contact(closest_plane(pb.pos, pb.rot, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            if has_pair_kind(3u) {
+                point_contact(closest_plane(pb.pos, pb.rot, pa.pos), pa.pos, sa.x, ba, bb, mu, slot);
+            }
         }
         case 4u, 5u: {
-            // A sphere's half length is 0.
-            capsule_capsule(pa.pos, pa.rot, sa.x, sa.y, pb.pos, pb.rot, sb.x, sb.y, ba, bb, mu, slot);
+            if has_pair_kind(4u) || has_pair_kind(5u) {
+                // A sphere's half length is 0.
+                capsule_capsule(pa.pos, pa.rot, sa.x, sa.y, pb.pos, pb.rot, sb.x, sb.y, ba, bb, mu, slot);
+            }
         }
         case 6u: {
-            capsule_box(pa.pos, pa.rot, sa.x, sa.y, pb.pos, pb.rot, sb.xyz, ba, bb, mu, slot);
+            if has_pair_kind(6u) {
+                capsule_box(pa.pos, pa.rot, sa.x, sa.y, pb.pos, pb.rot, sb.xyz, ba, bb, mu, slot);
+            }
         }
         case 7u: {
-            capsule_plane(pa.pos, pa.rot, sa.x, sa.y, pb.pos, pb.rot, ba, bb, mu, slot);
+            if has_pair_kind(7u) {
+                capsule_plane(pa.pos, pa.rot, sa.x, sa.y, pb.pos, pb.rot, ba, bb, mu, slot);
+            }
         }
         case 10u: {
-            if !boxes_near(pa.pos, pa.rot, sa.xyz, pb.pos, pb.rot, sb.xyz) {
-                return;
+            if has_pair_kind(10u) {
+                if !boxes_near(pa.pos, pa.rot, sa.xyz, pb.pos, pb.rot, sb.xyz) {
+                    return;
+                }
+                box_vertices_in_box(pa.pos, pa.rot, sa.xyz, pb.pos, pb.rot, sb.xyz, sb.w, ba, bb, mu, slot);
+                // b's vertices against a, the roles swapped.
+                box_vertices_in_box(pb.pos, pb.rot, sb.xyz, pa.pos, pa.rot, sa.xyz, sa.w, bb, ba, mu, slot + 8u);
             }
-            box_vertices_in_box(pa.pos, pa.rot, sa.xyz, pb.pos, pb.rot, sb.xyz, sb.w, ba, bb, mu, slot);
-            // b's vertices against a, the roles swapped.
-            box_vertices_in_box(pb.pos, pb.rot, sb.xyz, pa.pos, pa.rot, sa.xyz, sa.w, bb, ba, mu, slot + 8u);
         }
         case 11u: {
-            box_plane(pa.pos, pa.rot, sa.xyz, pb.pos, pb.rot, ba, bb, mu, slot);
+            if has_pair_kind(11u) {
+                box_plane(pa.pos, pa.rot, sa.xyz, pb.pos, pb.rot, ba, bb, mu, slot);
+            }
         }
         default: {}
     }
