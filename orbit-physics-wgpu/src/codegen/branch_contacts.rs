@@ -122,8 +122,14 @@ impl Gen<'_> {
     }
 
     pub(super) fn branch_contact_rows(&mut self, br: &Branches) {
-        self.line("// The rows of this lane's contacts.");
+        self.line("// The rows of this lane's contacts; without one, the first slot is inert (no");
+        self.line("// effective mass, no friction) for the sweeps, which visit it regardless.");
         self.open("fn build_contacts()");
+        if br.contact_slots > 0 {
+            self.line("k_meff[0u] = vec3<f32>(0.0);");
+            self.line("k_mu[0u] = 0.0;");
+            self.line("k_lam[0u] = vec3<f32>(0.0);");
+        }
         self.each_contact(br, |g, p, c| g.contact_build(br.chain_len(), p, c));
         self.close();
         self.line("");
@@ -205,9 +211,19 @@ impl Gen<'_> {
     }
 
     /// Emits one Gauss–Seidel visit of each of this lane's contacts (its normal row, then both
-    /// tangents clamped to the friction disk), as the one-thread kernel's `solve_contact`.
+    /// tangents clamped to the friction disk), as the one-thread kernel's `solve_contact`. Every
+    /// lane runs it on its own rows and only the owner's (`own`) changes count, so no branch
+    /// splits the quad: the first slot is visited even when inert, the others by the owner.
     pub(super) fn branch_contact_visits(&mut self, br: &Branches) {
-        self.each_contact(br, |g, p, c| g.contact_visit(br.chain_len(), p, c));
+        if br.contact_slots == 0 {
+            return;
+        }
+        self.open("");
+        self.contact_visit(br.chain_len(), "k_", "0u");
+        self.close();
+        self.open("for (var c = 1u; c < select(1u, nc, own); c++)");
+        self.contact_visit(br.chain_len(), "kx_", "c");
+        self.close();
     }
 
     fn contact_visit(&mut self, n: usize, p: &str, c: &str) {
@@ -229,30 +245,27 @@ impl Gen<'_> {
             jq(0)
         ));
         self.line("let ln = normal_impulse(lam.x, jn, tgt.x, r, meff.x);");
-        self.open("if ln != lam.x");
-        self.branch_push(n, (&wr, &wb, &row(0)), "(ln - lam.x)");
-        self.close();
+        // Selects, not branches: an unchanged impulse pushes zero.
+        self.line("let dn = select(0.0, ln - lam.x, own);");
+        self.branch_push(n, (&wr, &wb, &row(0)), "dn");
         self.line(format!("let lim = {p}mu[{c}] * ln;"));
-        self.line("var lt = vec2<f32>(0.0);");
-        self.open("if lim > 0.0");
         self.line("let v = rv + cross(rw, lever);");
         self.line(format!(
             "let jt = vec2<f32>(dot(v, basis[1]){}, dot(v, basis[2]){});",
             jq(1),
             jq(2)
         ));
-        self.line("lt = lam.yz - RELAXATION * meff.yz * (jt - tgt.yz + friction_r(r) * lam.yz);");
+        self.line(
+            "var lt = lam.yz - RELAXATION * meff.yz * (jt - tgt.yz + friction_r(r) * lam.yz);",
+        );
         self.line("let mag = length(lt);");
-        self.line("if mag > lim { lt *= lim / max(mag, 1e-20); }");
-        self.close();
-        self.line("let dt = lt - lam.yz;");
-        self.line("let slip = any(dt != vec2<f32>(0.0));");
-        self.open("if slip");
+        self.line("lt = select(lt, lt * (lim / max(mag, 1e-20)), mag > lim);");
+        self.line("lt = select(vec2<f32>(0.0), lt, lim > 0.0);");
+        self.line("let dt = select(vec2<f32>(0.0), lt - lam.yz, own);");
         self.branch_push(n, (&wr, &wb, &row(1)), "dt.x");
         self.branch_push(n, (&wr, &wb, &row(2)), "dt.y");
-        self.close();
         self.line(format!(
-            "if slip || ln != lam.x {{ {p}lam[{c}] = vec3<f32>(ln, lt); }}"
+            "{p}lam[{c}] = select(lam, vec3<f32>(ln, lt), own);"
         ));
     }
 

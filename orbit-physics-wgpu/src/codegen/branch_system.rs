@@ -172,6 +172,9 @@ impl Gen<'_> {
         self.open("fn limit_rows()");
         for j in 0..n {
             self.line(format!("l_on[{j}] = false;"));
+            // An inert row for the sweeps, which visit it regardless.
+            self.line(format!("l_meff[{j}] = 0.0;"));
+            self.line(format!("l_lam[{j}] = 0.0;"));
             let limited = self.any_dof(br, j, |d| {
                 s.dofs[d].lower.is_finite() || s.dofs[d].upper.is_finite()
             });
@@ -315,27 +318,28 @@ impl Gen<'_> {
             "// One copy of the turn's code: the owner's velocity by a shuffle within the quad.",
         );
         self.open("for (var t = 0u; t < NBR; t++)");
-        self.open("if lane == t");
+        // Every lane runs the turn on its own rows and keeps only the owner's changes: a branch
+        // on the owner (or on a row being active) costs the quad more than the idle arithmetic.
+        self.open("");
+        self.line("let own = lane == t;");
         self.branch_contact_visits(br);
         for j in 0..n {
-            self.open(format!("if l_on[{j}]"));
+            self.open("");
             self.line(format!("let lam = l_lam[{j}];"));
             self.line(format!(
                 "let nl = normal_impulse(lam, l_sd[{j}] * qd[{j}], l_tgt[{j}], l_r[{j}], l_meff[{j}]);"
             ));
-            self.open("if nl != lam");
-            self.branch_push(n, ("l_wr", "l_wb", &j.to_string()), "(nl - lam)");
-            self.line(format!("l_lam[{j}] = nl;"));
-            self.close();
+            self.line("let dl = select(0.0, nl - lam, own);");
+            self.branch_push(n, ("l_wr", "l_wb", &j.to_string()), "dl");
+            self.line(format!("l_lam[{j}] = select(lam, nl, own);"));
             self.close();
         }
         self.close();
         self.line("let owner = (sid & ~3u) | t;");
         self.line("let nv = subgroupShuffle(rv, owner);");
         self.line("let nw = subgroupShuffle(rw, owner);");
-        self.open("if lane != t");
+        self.line("// The owner's own difference is zero.");
         self.branch_follow(n, "nv - rv", "nw - rw");
-        self.close();
         self.line("rv = nv;");
         self.line("rw = nw;");
         self.close();
