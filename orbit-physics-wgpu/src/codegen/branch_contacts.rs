@@ -270,7 +270,8 @@ impl Gen<'_> {
     }
 
     /// Emits the warm start of this lane's contacts: the entry among its own with the same
-    /// slot (an entry's slot is unique), if it has a normal impulse.
+    /// slot (an entry's slot is unique), if it has a normal impulse; without one the impulses
+    /// pushed are zero (selects, not branches).
     pub(super) fn branch_contact_warm(&mut self, br: &Branches) {
         if br.contact_slots == 0 {
             return;
@@ -286,18 +287,17 @@ impl Gen<'_> {
             g.open("for (var i = 0u; i < C_CAP; i++)");
             g.line(format!("if wslot[i] == {p}slot[{c}] {{ found = i; }}"));
             g.close();
-            g.line("let k = lane * WARM_LANE + found;");
-            g.open("if found != C_CAP && warm[warm_addr(k, 1u)] != 0.0");
+            g.line("let k = lane * WARM_LANE + select(0u, found, found != C_CAP);");
             g.line(
-                "let lam = vec3<f32>(warm[warm_addr(k, 1u)], warm[warm_addr(k, 2u)], warm[warm_addr(k, 3u)]);",
+                "let lw = vec3<f32>(warm[warm_addr(k, 1u)], warm[warm_addr(k, 2u)], warm[warm_addr(k, 3u)]);",
             );
+            g.line("let lam = select(vec3<f32>(0.0), lw, found != C_CAP && lw.x != 0.0);");
             g.line(format!("{p}lam[{c}] = lam;"));
             let (wr, wb) = (format!("{p}wr"), format!("{p}wb"));
             for d in 0..3 {
                 let x = ["lam.x", "lam.y", "lam.z"][d];
                 g.branch_push(br.chain_len(), (&wr, &wb, &format!("3u * {c} + {d}u")), x);
             }
-            g.close();
         });
     }
 

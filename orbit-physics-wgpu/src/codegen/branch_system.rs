@@ -260,17 +260,20 @@ impl Gen<'_> {
         self.line("if first_substep && inp[lay[LAY_IN_FRESH] + env] != 0.0 { return; }");
         self.line("let v0 = rv;");
         self.line("let w0 = rw;");
+        // Every entry is loaded before anything waits on one; an entry that does not match
+        // pushes a zero impulse (selects, not branches).
+        for j in 0..n {
+            self.line(format!("let lk{j} = lane * WARM_LANE + C_CAP + {j}u;"));
+            self.line(format!(
+                "let lw{j} = vec2<f32>(warm[warm_addr(lk{j}, 0u)], warm[warm_addr(lk{j}, 1u)]);"
+            ));
+        }
         self.branch_contact_warm(br);
         for j in 0..n {
-            self.open(format!("if l_on[{j}]"));
-            self.line(format!("let k = lane * WARM_LANE + C_CAP + {j}u;"));
-            self.open(format!(
-                "if bitcast<u32>(warm[warm_addr(k, 0u)]) == l_slot[{j}] && warm[warm_addr(k, 1u)] != 0.0"
+            self.line(format!(
+                "l_lam[{j}] = select(0.0, lw{j}.y, l_on[{j}] && bitcast<u32>(lw{j}.x) == l_slot[{j}] && lw{j}.y != 0.0);"
             ));
-            self.line(format!("l_lam[{j}] = warm[warm_addr(k, 1u)];"));
             self.branch_push(n, ("l_wr", "l_wb", &j.to_string()), &format!("l_lam[{j}]"));
-            self.close();
-            self.close();
         }
         self.line(format!("let dv = quad_sum3((rv - v0){bm});"));
         self.line(format!("let dw = quad_sum3((rw - w0){bm});"));
