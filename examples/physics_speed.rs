@@ -19,6 +19,7 @@ use std::time::{Duration, Instant};
 
 use clap::Parser;
 use orbit::core::physics::{PhysicsBackend, SimCfg, build_backend};
+use rayon::prelude::*;
 
 #[derive(Parser)]
 #[command(about = "Physics steps/s of a scene file per physics backend")]
@@ -76,11 +77,17 @@ fn pass(
     let mut checksum = 0.0f32;
     for k in k0..k0 + chunks {
         let t = (k * args.substeps) as f32 * args.dt;
-        for (e, row) in efforts.chunks_exact_mut(dofs).enumerate() {
-            for (j, x) in row.iter_mut().enumerate() {
-                *x = args.effort * (std::f32::consts::PI * t + j as f32 + 0.01 * e as f32).sin();
-            }
-        }
+        // On every core: 65 536 envs' sines take one core about 3 ms, most of the time the GPU
+        // takes for the dispatch they go with.
+        efforts
+            .par_chunks_exact_mut(dofs)
+            .enumerate()
+            .for_each(|(e, row)| {
+                for (j, x) in row.iter_mut().enumerate() {
+                    *x =
+                        args.effort * (std::f32::consts::PI * t + j as f32 + 0.01 * e as f32).sin();
+                }
+            });
         backend.set_joint_efforts(0, &efforts)?;
         backend.step_n(args.substeps)?;
         if read || k + 1 == k0 + chunks {
