@@ -49,9 +49,10 @@ impl Gen<'_> {
         self.line(
             "// side b moving), lever from the root's centre of mass, friction, warm-start slot;",
         );
-        self.line("// its rows 3c + d: the chain's");
-        self.line("// Jacobian entries and W's root and chain parts; effective masses, targets, the normal");
-        self.line("// row's regulariser and the impulses.");
+        self.line(
+            "// its rows 3c + d: the chain's Jacobian entries and W's root and chain parts; effective",
+        );
+        self.line("// masses, targets, the normal row's regulariser and the impulses.");
         for (p, len) in [("k_", "1"), ("kx_", "CX")] {
             for v in ["mu", "r"] {
                 self.line(format!("var<private> {p}{v}: array<f32, {len}>;"));
