@@ -1,11 +1,9 @@
-//! The one-thread-per-branch kernel's contacts: each lane runs the narrow phase over the groups
-//! of shape pairs its branch owns (`step/narrow_phase.wgsl`), then keeps the rows of its first
+//! The one-thread-per-branch kernel's contacts: each lane runs the narrow phase over its shape
+//! pairs (`branch_narrow_phase.rs`), then keeps the rows of its first
 //! contact in arrays indexed by constants (registers) and those of any further contacts in
 //! arrays indexed at run time (local memory): a leg mostly touches the ground at one point, and
 //! registers for more slots would spill (docs/experiments/ant-four-threads-per-env.md). Each
 //! row is `W`'s six root entries and its chain's, and its chain's Jacobian entries.
-
-use std::fmt::Write as _;
 
 use super::Gen;
 use super::branch_threads::Branches;
@@ -37,9 +35,6 @@ impl Gen<'_> {
             self.line(format!("var<private> {v}, MAX_C>;"));
         }
         self.line("var<private> c_slot: array<u32, MAX_C>;");
-        self.line("// Body poses for the narrow phase: the root's link and this lane's chain.");
-        self.line("var<private> bpos: array<vec3<f32>, NB1>;");
-        self.line("var<private> brot: array<vec4<f32>, NB1>;");
         self.line(
             "// A contact's slot (k_ for the first, in registers; kx_ for the others, at their",
         );
@@ -73,17 +68,6 @@ impl Gen<'_> {
             ));
         }
         self.line("");
-        let mut here = String::from("var l = 0u;");
-        for (g, &lane) in br.group_lanes.iter().enumerate() {
-            if lane != 0 {
-                write!(here, " l = select(l, {lane}u, g == {g}u);").expect("write to string");
-            }
-        }
-        self.line("// Whether this lane tests group g of shape pairs.");
-        self.line(format!(
-            "fn group_here(g: u32) -> bool {{ {here} return l == lane; }}"
-        ));
-        self.line("");
         self.line("// The chain slot of body b on this lane, -1 for the root's link or none.");
         self.open("fn body_slot(b: i32) -> i32");
         self.line("var s = -1;");
@@ -92,18 +76,6 @@ impl Gen<'_> {
             self.line(format!("s = select(s, {j}, b == {l});"));
         }
         self.line("return s;");
-        self.close();
-        self.line("");
-        self.open("fn copy_body_poses()");
-        self.line(format!("bpos[{0}] = rpos;\nbrot[{0}] = rrot;", br.root));
-        for j in 0..br.chain_len() {
-            let l = self.per_lane(br, j, |l| format!("{l}u"));
-            self.open("");
-            self.line(format!("let l = {l};"));
-            self.line(format!("bpos[l] = lpos[{j}];"));
-            self.line(format!("brot[l] = lrot[{j}];"));
-            self.close();
-        }
         self.close();
         self.line("");
     }

@@ -419,6 +419,7 @@ impl Gen<'_> {
             }
             self.close();
         }
+        self.line("load_frictions();");
         self.close();
         self.line("");
         self.open("fn load_applied()");

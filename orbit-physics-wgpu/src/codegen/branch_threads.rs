@@ -21,9 +21,11 @@ pub struct Branches {
     pub root: usize,
     /// Each branch's links, from the root outwards.
     pub chains: Vec<Vec<usize>>,
-    /// The lane that tests each group of shape pairs (the geometry table's order): its
-    /// branch's, or lane 0 for the root's link against fixed shapes.
-    pub group_lanes: Vec<usize>,
+    /// Each lane's shape pairs (indices of the geometry table's pairs, in its order): a group of
+    /// pairs that joins a branch is its lane's; the pairs of the others (the root's link
+    /// against fixed shapes) are dealt out, those that make the most contacts first, each to
+    /// the lane with the fewest contact slots so far.
+    pub lane_pairs: Vec<Vec<usize>>,
     /// Contact slots per lane: the most contacts any lane's pairs can make, at most
     /// `MAX_CONTACTS`.
     pub contact_slots: usize,
@@ -76,27 +78,43 @@ impl Branches {
             (b >= 0).then(|| chains.iter().position(|c| c.contains(&(b as usize))))?
         };
         let geo = scene.geometry_table();
-        let mut group_lanes = Vec::new();
-        let mut slots = vec![0; chains.len()];
+        let pair_slots = |k: usize| {
+            let [a, b, _, _] = geo.data[geo.pairs + k];
+            compile::slots(scene.shapes[a as usize].kind, scene.shapes[b as usize].kind)
+        };
+        let mut lane_pairs = vec![Vec::new(); chains.len()];
+        let mut shared = Vec::new();
         for g in 0..geo.num_groups {
             let [a, b, first, count] = geo.data[geo.groups + g];
-            let lane = match (branch_of(a), branch_of(b)) {
+            let pairs = first as usize..(first + count) as usize;
+            match (branch_of(a), branch_of(b)) {
                 (Some(x), Some(y)) if x != y => return None,
-                (Some(x), _) | (_, Some(x)) => x,
-                (None, None) => 0,
-            };
-            for k in first as usize..(first + count) as usize {
-                let [pa, pb, _, _] = geo.data[geo.pairs + k];
-                let kind = |s: f32| scene.shapes[s as usize].kind;
-                slots[lane] += compile::slots(kind(pa), kind(pb));
+                (Some(x), _) | (_, Some(x)) => lane_pairs[x].extend(pairs),
+                (None, None) => shared.extend(pairs),
             }
-            group_lanes.push(lane);
+        }
+        let mut slots: Vec<usize> = lane_pairs
+            .iter()
+            .map(|pairs| pairs.iter().map(|&k| pair_slots(k)).sum())
+            .collect();
+        // A lane's contact slots size every lane's arrays and warm-start entries: the root's
+        // pairs on one lane would give all of them its count.
+        shared.sort_by_key(|&k| std::cmp::Reverse(pair_slots(k)));
+        for k in shared {
+            let lane = (0..slots.len())
+                .min_by_key(|&l| slots[l])
+                .expect("two branches or more");
+            slots[lane] += pair_slots(k);
+            lane_pairs[lane].push(k);
+        }
+        for pairs in &mut lane_pairs {
+            pairs.sort_unstable();
         }
         let contact_slots = slots.into_iter().max().unwrap_or(0).min(MAX_CONTACTS);
         Some(Self {
             root,
             chains,
-            group_lanes,
+            lane_pairs,
             contact_slots,
         })
     }
@@ -105,6 +123,18 @@ impl Branches {
     pub fn chain_len(&self) -> usize {
         self.chains[0].len()
     }
+}
+
+/// Lane `l`'s value `values[l]`: a select over the lanes, the value of lane 0 where `values`
+/// has no entry for a lane.
+pub(super) fn lane_select(values: &[String]) -> String {
+    let mut s = values[0].clone();
+    for (l, v) in values.iter().enumerate().skip(1) {
+        if *v != values[0] {
+            s = format!("select({s}, {v}, lane == {l}u)");
+        }
+    }
+    s
 }
 
 impl Gen<'_> {
@@ -117,13 +147,7 @@ impl Gen<'_> {
         value: impl Fn(usize) -> String,
     ) -> String {
         let values: Vec<String> = br.chains.iter().map(|c| value(c[i])).collect();
-        let mut s = values[0].clone();
-        for (b, v) in values.iter().enumerate().skip(1) {
-            if *v != values[0] {
-                s = format!("select({s}, {v}, lane == {b}u)");
-            }
-        }
-        s
+        lane_select(&values)
     }
 
     /// ` * bmask` where some lanes hold no branch (their share of a sum is zero), else nothing.
@@ -139,6 +163,7 @@ impl Gen<'_> {
     pub(super) fn branch_threads(&mut self, br: &Branches) {
         self.branch_state(br);
         self.branch_contact_state(br);
+        self.branch_narrow_phase(br);
         self.branch_kinematics(br);
         self.branch_rnea(br);
         self.branch_crba(br);

@@ -19,6 +19,7 @@
 
 mod articulation;
 mod branch_contacts;
+mod branch_narrow_phase;
 mod branch_system;
 mod branch_threads;
 mod constants;
@@ -151,6 +152,7 @@ const STEP_WGSL: &str = concat!(
     include_str!("../step/math.wgsl"),
     include_str!("../step/addresses.wgsl"),
     include_str!("../step/narrow_phase.wgsl"),
+    include_str!("../step/pair_loop.wgsl"),
     include_str!("../step/rows.wgsl"),
     include_str!("../step/constraints.wgsl"),
     include_str!("../step/run_env.wgsl"),
@@ -450,14 +452,23 @@ mod tests {
             "select(select(select(6u, 8u, lane == 1u), 10u, lane == 2u), 12u, lane == 3u)"
         ));
         assert!(src.contains("let tw = fwr + quad_sum3(fw0);"));
-        // On the ground each lane tests its leg's shapes (and lane 0 the torso's) against it.
+        // On the ground each lane tests its leg's two capsules against it, and one of the
+        // torso's (the capsule at its leg's hip; lane 0 also the torso's sphere): 6 or 7
+        // contact slots a lane, where the torso's five shapes on one lane would make 13.
         let ground = SceneCfg {
             static_objects: vec![orbit_conformance::ground(1.0)],
             ..cfg
         };
         let scene = CompiledScene::new(&resolve(&ground)).expect("scene compiles");
         let branches = Branches::of(&scene).expect("no pair joins two legs");
-        assert_eq!(branches.group_lanes, [0, 0, 0, 1, 1, 2, 2, 3, 3]);
+        let pairs = [
+            vec![0, 1, 5, 6],
+            vec![2, 7, 8],
+            vec![3, 9, 10],
+            vec![4, 11, 12],
+        ];
+        assert_eq!(branches.lane_pairs, pairs);
+        assert_eq!(branches.contact_slots, 7);
         // Its contacts' visits sit in one loop over the legs' turns.
         let src = validate_form(&scene, KernelForm::ThreadPerBranch);
         assert!(src.contains("for (var t = 0u; t < NBR; t++)"));
