@@ -1,5 +1,5 @@
 //! Kernel generation: the scene-specific half of the WGSL kernel, written from the compiled
-//! scene, in one of two forms ([`KernelForm`]).
+//! scene, in one of three forms ([`KernelForm`]).
 //!
 //! Every env shares one topology, so in the straight-line form each loop over links, dofs, free
 //! objects and shape pairs is unrolled here, with the scene's numbers as literals and every
@@ -9,9 +9,10 @@
 //! joint's drive terms). Shader compilers take far longer than linearly on long straight-line
 //! code, so large articulations get the looped form: the scene as tables, read by the loops of
 //! `step/articulation_loops.wgsl`. In both, the narrow phase stays a loop over the scene's
-//! geometry table (a uniform buffer, see [`CompiledScene::geometry_table`]): unrolled per
-//! shape pair it would be tens of thousands of instructions, more than an instruction cache
-//! holds. The scene-independent half, the files of `step/` in the order of [`STEP_WGSL`], is
+//! geometry table (a uniform buffer, see [`CompiledScene::geometry_table`];
+//! `step/pair_loop.wgsl`): unrolled per shape pair it would be tens of thousands of
+//! instructions, more than an instruction cache holds. The thread-per-branch form, whose lanes
+//! hold a few pairs each, writes them out (`branch_narrow_phase.rs`). The scene-independent half, the files of `step/` in the order of [`STEP_WGSL`], is
 //! appended to what this module writes.
 //!
 //! This module is the driver (the order of the sections, the writer and the scene's topology
