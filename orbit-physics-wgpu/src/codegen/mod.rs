@@ -475,6 +475,11 @@ mod tests {
         assert!(src.contains("for (var t = 0u; t < NBR; t++)"));
         // Of the narrow phase's cases only sphere–plane (3) and capsule–plane (7) are live.
         assert!(src.contains("const PAIR_KINDS = 0x88u;"));
+        // Its pairs are written out, not looped over: lane 0's sphere–plane pair alone, then
+        // on every lane a hip, thigh and shin capsule against the plane.
+        assert!(!src.contains("fn collide_pair") && src.contains("if lane == 0u {"));
+        assert_eq!(src.matches("collide_shapes(3u, pa, pb").count(), 1);
+        assert_eq!(src.matches("collide_shapes(7u, pa, pb").count(), 3);
     }
 
     /// The Humanoid (27 dofs, self-collisions) compiles to a valid kernel.
