@@ -183,14 +183,19 @@ fn contact_object_push(c: u32, info: u32, impulse: vec3<f32>) {
     }
 }
 
-// The warm-start entry with this slot and a non-zero normal impulse, or MAX_C.
-fn warm_find(slot: u32) -> u32 {
-    for (var k = 0u; k < MAX_C; k++) {
-        if bitcast<u32>(warm[warm_addr(k, 0u)]) == slot && warm[warm_addr(k, 1u)] != 0.0 {
-            return k;
+// No warm-start entry's slot: an empty entry's, and one without a normal impulse (see
+// `warm_start`).
+const NO_WARM_SLOT: u32 = 0xFFFFFFFFu;
+
+// The first of the entries' `slots` equal to `slot`, or MAX_C.
+fn warm_find(slots: ptr<function, array<u32, MAX_C>>, slot: u32) -> u32 {
+    var found = MAX_C;
+    for (var k = MAX_C; k > 0u; k--) {
+        if (*slots)[k - 1u] == slot {
+            found = k - 1u;
         }
     }
-    return MAX_C;
+    return found;
 }
 
 // Applies last substep's impulses to the constraints with the same slot (contacts store their
@@ -200,8 +205,15 @@ fn warm_start() {
     if first_substep && inp[lay[LAY_IN_FRESH] + env] != 0.0 {
         return;
     }
+    // Every entry's slot first, as independent loads: a search that loads as it compares
+    // waits for each load in turn. An entry without a normal impulse matches nothing.
+    var slots: array<u32, MAX_C>;
+    for (var k = 0u; k < MAX_C; k++) {
+        let slot = bitcast<u32>(warm[warm_addr(k, 0u)]);
+        slots[k] = select(NO_WARM_SLOT, slot, warm[warm_addr(k, 1u)] != 0.0);
+    }
     for (var c = 0u; c < nc; c++) {
-        let k = warm_find(c_slot[c]);
+        let k = warm_find(&slots, c_slot[c]);
         if k == MAX_C {
             continue;
         }
@@ -216,7 +228,7 @@ fn warm_start() {
         }
     }
     for (var l = 0u; l < nlim; l++) {
-        let k = warm_find(l_slot[l]);
+        let k = warm_find(&slots, l_slot[l]);
         if k == MAX_C {
             continue;
         }
@@ -240,7 +252,7 @@ fn store_warm() {
         k += 1u;
     }
     for (; k < MAX_C; k++) {
-        warm[warm_addr(k, 0u)] = bitcast<f32>(0xFFFFFFFFu);
+        warm[warm_addr(k, 0u)] = bitcast<f32>(NO_WARM_SLOT);
         warm[warm_addr(k, 1u)] = 0.0;
     }
 }
