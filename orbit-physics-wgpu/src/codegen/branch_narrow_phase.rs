@@ -61,7 +61,7 @@ impl Gen<'_> {
         ));
         self.open("fn load_frictions()");
         for (i, lanes) in positions.iter().enumerate() {
-            let mu = self.pair_friction(lanes);
+            let mu = pair_friction(geo, lanes);
             self.line(format!("pair_mu[{i}] = {mu};"));
         }
         self.close();
@@ -72,58 +72,20 @@ impl Gen<'_> {
         // The geometry table is one of the kernel's bindings even where no pair reads it.
         self.line("_ = geo[0];");
         for (i, lanes) in positions.iter().enumerate() {
-            self.pair_position(br, i, lanes);
+            self.pair_position(geo, br, i, lanes);
         }
         self.close();
         self.line("");
     }
 
-    /// The friction of each lane's pair by MuJoCo's rule: the higher priority's, else the
-    /// larger.
-    fn pair_friction(&self, lanes: &[Option<usize>]) -> String {
-        let geo = &self.scene.geometry_table();
-        // The rule's shape or shapes on each lane.
-        let rule = |k: usize| {
-            let (a, b, _) = table_pair(geo, k);
-            let (pa, pb) = (table_shape(geo, a).priority, table_shape(geo, b).priority);
-            if pa > pb {
-                (Some(a), None)
-            } else if pb > pa {
-                (None, Some(b))
-            } else {
-                (Some(a), Some(b))
-            }
-        };
-        let shape = |s: Option<usize>| s.map(|s| format!("friction({s}u)"));
-        let first = present(lanes).next().map(rule);
-        if present(lanes).all(|k| {
-            let r = rule(k);
-            Some((r.0.is_some(), r.1.is_some())) == first.map(|f| (f.0.is_some(), f.1.is_some()))
-        }) {
-            // The same rule on every lane: one read of each side, its shape selected by lane.
-            let side = |second: bool| {
-                let values = by_lane(lanes, |_, k| {
-                    let r = rule(k);
-                    format!("{}u", if second { r.1 } else { r.0 }.unwrap_or(0))
-                });
-                format!("friction({})", lane_select(&values))
-            };
-            return match first {
-                Some((Some(_), Some(_))) => format!("max({}, {})", side(false), side(true)),
-                Some((Some(_), None)) => side(false),
-                Some((None, _)) => side(true),
-                None => f(0.0),
-            };
-        }
-        lane_select(&by_lane(lanes, |_, k| match rule(k) {
-            (Some(a), Some(b)) => format!("max(friction({a}u), friction({b}u))"),
-            (a, b) => shape(a).or(shape(b)).expect("a side"),
-        }))
-    }
-
     /// Emits the pair of each lane at position `i` of its list.
-    fn pair_position(&mut self, br: &Branches, i: usize, lanes: &[Option<usize>]) {
-        let geo = &self.scene.geometry_table();
+    fn pair_position(
+        &mut self,
+        geo: &GeometryTable,
+        br: &Branches,
+        i: usize,
+        lanes: &[Option<usize>],
+    ) {
         let shapes = |k: usize| {
             let (a, b, _) = table_pair(geo, k);
             (a, b)
@@ -148,7 +110,7 @@ impl Gen<'_> {
                 let (a, b) = shapes(k);
                 if second { b } else { a }
             };
-            let (pos, rot) = self.shape_pose(br, lanes, &shape);
+            let (pos, rot) = shape_pose(geo, br, lanes, &shape);
             self.line(format!("let p{name} = ShapePose({pos}, {rot});"));
             let size = lane_select(&by_lane(lanes, |_, k| {
                 let [x, y, z, r] = table_shape(geo, shape(k)).size;
@@ -202,52 +164,93 @@ impl Gen<'_> {
         }
         self.close();
     }
+}
 
-    /// The pose (position, rotation) of one shape (`shape` of a pair) of each lane's pair: a
-    /// fixed shape's from its env-frame literals, a moving one's from its body's pose on the
-    /// lane (the root's link or a link of the lane's chain) and its local literals.
-    fn shape_pose(
-        &self,
-        br: &Branches,
-        lanes: &[Option<usize>],
-        shape: &dyn Fn(usize) -> usize,
-    ) -> (String, String) {
-        let geo = &self.scene.geometry_table();
-        let table = |k: usize| table_shape(geo, shape(k));
-        let lit_pos = lane_select(&by_lane(lanes, |_, k| v3(table(k).pos)));
-        let lit_rot = lane_select(&by_lane(lanes, |_, k| q4(table(k).rot)));
-        let fixed_on: Vec<usize> = (0..lanes.len())
-            .filter(|&l| lanes[l].is_some_and(|k| table(k).body < 0))
-            .collect();
-        let moving_on = present(lanes).any(|k| table(k).body >= 0);
-        if !moving_on {
-            return (format!("fixed_pos({lit_pos})"), lit_rot);
+/// The friction of each lane's pair by MuJoCo's rule: the higher priority's, else the
+/// larger.
+fn pair_friction(geo: &GeometryTable, lanes: &[Option<usize>]) -> String {
+    // The rule's shape or shapes on each lane.
+    let rule = |k: usize| {
+        let (a, b, _) = table_pair(geo, k);
+        let (pa, pb) = (table_shape(geo, a).priority, table_shape(geo, b).priority);
+        if pa > pb {
+            (Some(a), None)
+        } else if pb > pa {
+            (None, Some(b))
+        } else {
+            (Some(a), Some(b))
         }
-        // The body's pose on each lane: its chain's link or the root's.
-        let body = |l: usize, k: usize, what: [&str; 2]| {
-            let b = table(k).body;
-            match br.chains[l].iter().position(|&x| x as i64 == b) {
-                Some(j) => format!("{}[{j}]", what[0]),
-                None => what[1].to_string(),
-            }
+    };
+    let shape = |s: Option<usize>| s.map(|s| format!("friction({s}u)"));
+    let first = present(lanes).next().map(rule);
+    if present(lanes).all(|k| {
+        let r = rule(k);
+        Some((r.0.is_some(), r.1.is_some())) == first.map(|f| (f.0.is_some(), f.1.is_some()))
+    }) {
+        // The same rule on every lane: one read of each side, its shape selected by lane.
+        let side = |second: bool| {
+            let values = by_lane(lanes, |_, k| {
+                let r = rule(k);
+                format!("{}u", if second { r.1 } else { r.0 }.unwrap_or(0))
+            });
+            format!("friction({})", lane_select(&values))
         };
-        let bp = lane_select(&by_lane(lanes, |l, k| body(l, k, ["lpos", "rpos"])));
-        let bq = lane_select(&by_lane(lanes, |l, k| body(l, k, ["lrot", "rrot"])));
-        let moving = (
-            format!("{bp} + qrot({bq}, {lit_pos})"),
-            format!("qmul({bq}, {lit_rot})"),
-        );
-        if fixed_on.is_empty() {
-            return moving;
-        }
-        // Fixed on some lanes, moving on others: both, selected.
-        let cond: Vec<String> = fixed_on.iter().map(|l| format!("lane == {l}u")).collect();
-        let cond = cond.join(" || ");
-        (
-            format!("select({}, fixed_pos({lit_pos}), {cond})", moving.0),
-            format!("select({}, {lit_rot}, {cond})", moving.1),
-        )
+        return match first {
+            Some((Some(_), Some(_))) => format!("max({}, {})", side(false), side(true)),
+            Some((Some(_), None)) => side(false),
+            Some((None, _)) => side(true),
+            None => f(0.0),
+        };
     }
+    lane_select(&by_lane(lanes, |_, k| match rule(k) {
+        (Some(a), Some(b)) => format!("max(friction({a}u), friction({b}u))"),
+        (a, b) => shape(a).or(shape(b)).expect("a side"),
+    }))
+}
+
+/// The pose (position, rotation) of one shape (`shape` of a pair) of each lane's pair: a
+/// fixed shape's from its env-frame literals, a moving one's from its body's pose on the
+/// lane (the root's link or a link of the lane's chain) and its local literals.
+fn shape_pose(
+    geo: &GeometryTable,
+    br: &Branches,
+    lanes: &[Option<usize>],
+    shape: &dyn Fn(usize) -> usize,
+) -> (String, String) {
+    let table = |k: usize| table_shape(geo, shape(k));
+    let lit_pos = lane_select(&by_lane(lanes, |_, k| v3(table(k).pos)));
+    let lit_rot = lane_select(&by_lane(lanes, |_, k| q4(table(k).rot)));
+    let fixed_on: Vec<usize> = (0..lanes.len())
+        .filter(|&l| lanes[l].is_some_and(|k| table(k).body < 0))
+        .collect();
+    let moving_on = present(lanes).any(|k| table(k).body >= 0);
+    if !moving_on {
+        return (format!("fixed_pos({lit_pos})"), lit_rot);
+    }
+    // The body's pose on each lane: its chain's link or the root's.
+    let body = |l: usize, k: usize, what: [&str; 2]| {
+        let b = table(k).body;
+        match br.chains[l].iter().position(|&x| x as i64 == b) {
+            Some(j) => format!("{}[{j}]", what[0]),
+            None => what[1].to_string(),
+        }
+    };
+    let bp = lane_select(&by_lane(lanes, |l, k| body(l, k, ["lpos", "rpos"])));
+    let bq = lane_select(&by_lane(lanes, |l, k| body(l, k, ["lrot", "rrot"])));
+    let moving = (
+        format!("{bp} + qrot({bq}, {lit_pos})"),
+        format!("qmul({bq}, {lit_rot})"),
+    );
+    if fixed_on.is_empty() {
+        return moving;
+    }
+    // Fixed on some lanes, moving on others: both, selected.
+    let cond: Vec<String> = fixed_on.iter().map(|l| format!("lane == {l}u")).collect();
+    let cond = cond.join(" || ");
+    (
+        format!("select({}, fixed_pos({lit_pos}), {cond})", moving.0),
+        format!("select({}, {lit_rot}, {cond})", moving.1),
+    )
 }
 
 /// `value(lane, pair)` for each lane, a lane without a pair taking the first lane's that has
