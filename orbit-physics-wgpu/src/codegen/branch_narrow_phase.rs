@@ -45,15 +45,19 @@ fn table_pair(geo: &GeometryTable, k: usize) -> (usize, usize, u32) {
     (a as usize, b as usize, slot as u32)
 }
 
+/// The kinds' code of the geometry table's pair `k` (a's kind × 4 + b's), as `collide_shapes`
+/// takes it.
+fn pair_code(geo: &GeometryTable, k: usize) -> u32 {
+    let (a, b, _) = table_pair(geo, k);
+    table_shape(geo, a).kind * 4 + table_shape(geo, b).kind
+}
+
 impl Gen<'_> {
     /// The narrow phase of each lane's pairs (`collide`) and the frictions it uses
     /// (`load_frictions`, called with the state).
     pub(super) fn branch_narrow_phase(&mut self, br: &Branches) {
         let geo = &self.scene.geometry_table();
-        let positions = pair_positions(br, |k| {
-            let (a, b, _) = table_pair(geo, k);
-            table_shape(geo, a).kind * 4 + table_shape(geo, b).kind
-        });
+        let positions = pair_positions(br, |k| pair_code(geo, k));
         self.line("// This lane's friction of each of its pairs, for this env.");
         self.line(format!(
             "var<private> pair_mu: array<f32, {}>;",
@@ -90,13 +94,7 @@ impl Gen<'_> {
             let (a, b, _) = table_pair(geo, k);
             (a, b)
         };
-        let code = lane_select(&by_lane(lanes, |_, k| {
-            let (a, b) = shapes(k);
-            format!(
-                "{}u",
-                table_shape(geo, a).kind * 4 + table_shape(geo, b).kind
-            )
-        }));
+        let code = lane_select(&by_lane(lanes, |_, k| format!("{}u", pair_code(geo, k))));
         let on: Vec<usize> = (0..lanes.len()).filter(|&l| lanes[l].is_some()).collect();
         self.line(format!("// Pair {i} of each lane: kinds {code}."));
         if on.len() < 4 {
@@ -169,42 +167,31 @@ impl Gen<'_> {
 /// The friction of each lane's pair by MuJoCo's rule: the higher priority's, else the
 /// larger.
 fn pair_friction(geo: &GeometryTable, lanes: &[Option<usize>]) -> String {
-    // The rule's shape or shapes on each lane.
-    let rule = |k: usize| {
+    // Which of the pair's shapes, a and b, the rule reads.
+    let reads = |k: usize| {
         let (a, b, _) = table_pair(geo, k);
         let (pa, pb) = (table_shape(geo, a).priority, table_shape(geo, b).priority);
-        if pa > pb {
-            (Some(a), None)
-        } else if pb > pa {
-            (None, Some(b))
-        } else {
-            (Some(a), Some(b))
-        }
+        (pa >= pb, pb >= pa)
     };
-    let shape = |s: Option<usize>| s.map(|s| format!("friction({s}u)"));
-    let first = present(lanes).next().map(rule);
-    if present(lanes).all(|k| {
-        let r = rule(k);
-        Some((r.0.is_some(), r.1.is_some())) == first.map(|f| (f.0.is_some(), f.1.is_some()))
-    }) {
+    let rule = |reads: (bool, bool), a: &str, b: &str| match reads {
+        (true, true) => format!("max(friction({a}), friction({b}))"),
+        (true, false) => format!("friction({a})"),
+        _ => format!("friction({b})"),
+    };
+    let rules: Vec<(bool, bool)> = present(lanes).map(reads).collect();
+    if rules.iter().all(|&r| r == rules[0]) {
         // The same rule on every lane: one read of each side, its shape selected by lane.
         let side = |second: bool| {
-            let values = by_lane(lanes, |_, k| {
-                let r = rule(k);
-                format!("{}u", if second { r.1 } else { r.0 }.unwrap_or(0))
-            });
-            format!("friction({})", lane_select(&values))
+            lane_select(&by_lane(lanes, |_, k| {
+                let (a, b, _) = table_pair(geo, k);
+                format!("{}u", if second { b } else { a })
+            }))
         };
-        return match first {
-            Some((Some(_), Some(_))) => format!("max({}, {})", side(false), side(true)),
-            Some((Some(_), None)) => side(false),
-            Some((None, _)) => side(true),
-            None => f(0.0),
-        };
+        return rule(rules[0], &side(false), &side(true));
     }
-    lane_select(&by_lane(lanes, |_, k| match rule(k) {
-        (Some(a), Some(b)) => format!("max(friction({a}u), friction({b}u))"),
-        (a, b) => shape(a).or(shape(b)).expect("a side"),
+    lane_select(&by_lane(lanes, |_, k| {
+        let (a, b, _) = table_pair(geo, k);
+        rule(reads(k), &format!("{a}u"), &format!("{b}u"))
     }))
 }
 
