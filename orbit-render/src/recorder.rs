@@ -58,7 +58,7 @@ impl VideoRecorder {
             )));
         }
         let scene = env.scene();
-        let renderer = Renderer::new(&scene.desc, &env.cfg.viewer, env.num_envs())?;
+        let renderer = Renderer::new(&scene.desc, &env.cfg.base.viewer, env.num_envs())?;
         Ok(Self {
             image: renderer.new_image(),
             renderer,
@@ -110,7 +110,11 @@ impl VideoRecorder {
         let markers = env.debug_markers(self.renderer.env());
         self.renderer
             .render(env.scene().backend.as_ref(), &markers, &mut self.image);
-        video.push(self.image.clone())?;
+        if let Err(e) = video.push(self.image.clone()) {
+            // The encoder has stopped and removed its file: nothing is left to finish.
+            self.current = None;
+            return Err(e);
+        }
         self.progress.0.fetch_add(1, Ordering::Relaxed);
         if video.frames() >= self.cfg.length {
             let mut done = self.current.take().expect("open");

@@ -75,35 +75,59 @@ impl GifWriter {
         let mut frame =
             gif::Frame::from_rgb_speed(self.size.0, self.size.1, image.rgb(), QUANTIZER_SPEED);
         frame.delay = self.delay_cs;
-        let encoder = self.encoder.as_mut().expect("open until finished");
-        encoder
-            .write_frame(&frame)
-            .map_err(|source| RenderError::Gif {
+        let Some(encoder) = self.encoder.as_mut() else {
+            return Err(ended_early(&self.path));
+        };
+        if let Err(source) = encoder.write_frame(&frame) {
+            self.discard();
+            return Err(RenderError::Gif {
                 path: self.path.clone(),
                 source,
-            })?;
+            });
+        }
         self.frames += 1;
         Ok(())
     }
 
+    /// Drops the encoder and removes the unfinished file: a failed video leaves no truncated
+    /// GIF that a viewer would show as complete.
+    fn discard(&mut self) {
+        self.encoder = None;
+        if let Err(e) = std::fs::remove_file(&self.path) {
+            tracing::warn!(
+                "{}: removing the unfinished video: {e}",
+                self.path.display()
+            );
+        }
+    }
+
     /// Writes the trailer and closes the file.
     pub fn finish(mut self) -> Result<PathBuf, RenderError> {
+        if self.encoder.is_none() {
+            return Err(ended_early(&self.path));
+        }
         self.close()?;
         Ok(std::mem::take(&mut self.path))
     }
 
     fn close(&mut self) -> Result<(), RenderError> {
-        if let Some(encoder) = self.encoder.take() {
-            let path = self.path.clone();
-            let mut file = encoder
-                .into_inner()
-                .map_err(|source| RenderError::Gif { path, source })?;
-            std::io::Write::flush(&mut file).map_err(|source| RenderError::Io {
-                path: self.path.clone(),
-                source,
-            })?;
+        let Some(encoder) = self.encoder.take() else {
+            return Ok(());
+        };
+        let path = self.path.clone();
+        let written = encoder
+            .into_inner()
+            .map_err(|source| RenderError::Gif { path, source })
+            .and_then(|mut file| {
+                std::io::Write::flush(&mut file).map_err(|source| RenderError::Io {
+                    path: self.path.clone(),
+                    source,
+                })
+            });
+        if written.is_err() {
+            self.discard();
         }
-        Ok(())
+        written
     }
 }
 
@@ -148,9 +172,12 @@ impl GifThread {
         self.frames
     }
 
-    /// Queues a frame; a failure of the encoder (e.g. a full disk) is returned here.
+    /// Queues a frame; a failure of the encoder (e.g. a full disk) is returned here, once: the
+    /// video has then ended and later calls return an error without a file.
     pub fn push(&mut self, image: Image) -> Result<(), RenderError> {
-        let sender = self.sender.as_ref().expect("open until closed");
+        let Some(sender) = self.sender.as_ref() else {
+            return Err(self.ended());
+        };
         if sender.send(image).is_err() {
             // The encoder stopped early: its result says why.
             self.sender = None;
@@ -171,13 +198,30 @@ impl GifThread {
     }
 
     /// Closes the video and waits for the encoder: the path written, or what went wrong.
+    /// After the first call, an error: the result was returned then.
     pub fn join(&mut self) -> Result<PathBuf, RenderError> {
         self.close();
-        let handle = self.handle.take().expect("joined once");
+        let Some(handle) = self.handle.take() else {
+            return Err(self.ended());
+        };
         handle
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
     }
+
+    fn ended(&self) -> RenderError {
+        RenderError::InvalidVideo(format!(
+            "the video ended after {} frames; its result was returned then",
+            self.frames
+        ))
+    }
+}
+
+fn ended_early(path: &Path) -> RenderError {
+    RenderError::InvalidVideo(format!(
+        "{}: the video has ended (finished, or stopped by an earlier error)",
+        path.display()
+    ))
 }
 
 impl Drop for GifThread {
@@ -246,6 +290,43 @@ mod tests {
             frames += 1;
         }
         assert_eq!(frames, 3);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A full disk (a link to Linux's `/dev/full`, whose writes fail with ENOSPC) ends the
+    /// video with an error, not a panic, and leaves no file behind; later calls are errors too.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_full_disk_is_an_error_and_leaves_no_file() {
+        let dir = std::env::temp_dir().join(format!("orbit-render-full-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("clip.gif");
+        std::os::unix::fs::symlink("/dev/full", &path).unwrap();
+        let writer = GifWriter::create(&path, 64, 64, 0.02).unwrap();
+        let mut video = GifThread::spawn(writer);
+        let mut image = Image::new(64, 64);
+        let mut failed = None;
+        // Each noisy 64×64 frame is several kB: the 8 kB buffer flushes within a few frames.
+        for k in 0..QUEUE_FRAMES * 4 {
+            for (i, px) in image.rgb_mut().iter_mut().enumerate() {
+                *px = ((i * 7919 + k * 104_729) % 251) as u8;
+            }
+            if let Err(e) = video.push(image.clone()) {
+                failed = Some(e);
+                break;
+            }
+        }
+        let error = match failed {
+            Some(e) => e,
+            None => video.join().unwrap_err(),
+        };
+        assert!(error.to_string().contains("No space left"), "{error}");
+        assert!(video.push(image).is_err());
+        assert!(video.join().is_err());
+        assert!(
+            std::fs::symlink_metadata(&path).is_err(),
+            "the file was left"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
