@@ -82,9 +82,19 @@ pub fn resumed_history(checkpoint_base: &Path, own: &[IterationLog]) -> Vec<Iter
 }
 
 /// Reads a `scalars.csv` back into one [`IterationLog`] per iteration (for re-plotting a run
-/// that was stopped before it drew its curves). Tags it does not know go to `episode`.
+/// that was stopped before it drew its curves). Tags it does not know go to `episode`. A last
+/// line without its newline was cut by a kill mid-write: it is dropped with a warning.
 pub fn read_scalars(path: &Path) -> Result<Vec<IterationLog>, RlError> {
-    let text = std::fs::read_to_string(path).map_err(RlError::io(path))?;
+    let mut text = std::fs::read_to_string(path).map_err(RlError::io(path))?;
+    if !text.is_empty() && !text.ends_with('\n') {
+        let cut = text.rfind('\n').map_or(0, |i| i + 1);
+        tracing::warn!(
+            "{}: dropping the cut last line `{}` (the run was stopped while writing it)",
+            path.display(),
+            &text[cut..]
+        );
+        text.truncate(cut);
+    }
     let bad = |line: usize, what: &str| RlError::Io {
         path: path.to_path_buf(),
         source: std::io::Error::new(

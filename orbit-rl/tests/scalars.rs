@@ -103,3 +103,39 @@ fn a_resumed_run_plots_the_earlier_run_before_its_own_iterations() {
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(resumed_history(&dir.join("model_2"), &own), own);
 }
+
+/// A kill while a row is written leaves a last line without its newline: reading (for
+/// `plot_run`, and for a resumed run's curves) drops it and keeps every whole row, even when
+/// the cut row would parse (a value cut to fewer digits).
+#[test]
+fn a_cut_last_line_is_dropped() {
+    let dir = std::env::temp_dir().join(format!("orbit-cut-scalars-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let written = vec![log(0, None), log(1, Some(0.5))];
+    {
+        let mut out = ScalarLog::create(&dir).unwrap();
+        for l in &written {
+            out.write(l).unwrap();
+        }
+    }
+    let path = dir.join("scalars.csv");
+    for cut in [
+        "2,1228800,6.375,Loss/val",
+        "2,1228800,6.375,Loss/value_function,7",
+    ] {
+        let whole = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, format!("{whole}{cut}")).unwrap();
+        assert_eq!(read_scalars(&path).unwrap(), written, "{cut}");
+        std::fs::write(&path, whole).unwrap();
+    }
+    std::fs::write(
+        &path,
+        format!("{}2,1", std::fs::read_to_string(&path).unwrap()),
+    )
+    .unwrap();
+    let own = vec![log(2, Some(0.75))];
+    let history = resumed_history(&dir.join("model_1"), &own);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let iterations: Vec<usize> = history.iter().map(|l| l.iteration).collect();
+    assert_eq!(iterations, [0, 1, 2]);
+}
