@@ -10,7 +10,8 @@
 //! Writes `logs/<experiment>/<timestamp>/`: resolved configs (`params/`), checkpoints
 //! (`model_<it>.*`), `scalars.csv` and `training_curves.png`; with `--video`, GIFs in `videos/train/`.
 //! Ctrl-C (or SIGTERM) stops at the next env step with a checkpoint that `--resume` continues
-//! from; a second Ctrl-C (more than a second later) exits at once.
+//! from; a second Ctrl-C waits for it, a third exits at once (each more than a second after the
+//! one before).
 
 use clap::Parser;
 

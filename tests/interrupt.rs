@@ -93,6 +93,12 @@ fn sigint_saves_a_checkpoint_that_resume_continues() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(130), "{stderr}");
     assert!(stderr.contains("checkpoint saved"), "{stderr}");
+    // The signal was acknowledged as it came, before the checkpoint was written.
+    let acknowledged = stderr.find("a checkpoint will be written").expect(&stderr);
+    assert!(
+        acknowledged < stderr.find("checkpoint saved").unwrap(),
+        "{stderr}"
+    );
     // Standard output is a pipe: the first iteration's phases and a line per iteration.
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(

@@ -455,7 +455,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                 let base = dir.join(format!("model_{}", it - 1));
                 if !base.with_extension("json").exists() {
                     tracing::warn!(
-                        "stopping: saving a checkpoint (a signal more than a second later aborts)"
+                        "stopping: saving a checkpoint (a third Ctrl-C aborts without it)"
                     );
                     self.save_checkpoint()?;
                 }
