@@ -124,7 +124,9 @@ impl RapierBackend {
                 "num_envs must be at least 1".into(),
             ));
         }
-        orbit_core::physics::check_host_memory(BACKEND_NAME, num_envs, bytes_per_env(scene))?;
+        // Held until the worlds are built: data-parallel ranks building beside this count it.
+        let _reservation =
+            orbit_core::physics::check_host_memory(BACKEND_NAME, num_envs, bytes_per_env(scene))?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(sim.num_threads)
             .build()
