@@ -276,6 +276,33 @@ fn malformed_documents_name_line_element_and_attribute() {
             "test.xml:8: <motor> attribute `joint`: no hinge or slide joint is named `missing`",
         ),
         (
+            body("<geom size=\"0.1\" densty=\"300\"/>"),
+            "test.xml:7: <geom> attribute `densty`: not an attribute the importer takes on \
+             `<geom>`; it takes",
+        ),
+        (
+            body("<joint ref=\"0.5\"/><geom size=\"0.1\"/>"),
+            "test.xml:7: <joint> attribute `ref`: not an attribute the importer takes",
+        ),
+        (
+            "<mujoco>\n<default>\n<default class=\"leg\">\n<geom densty=\"3\"/>\n</default>\n\
+             </default>\n<worldbody>\n<body>\n<geom size=\"1\"/>\n</body>\n</worldbody>\n</mujoco>"
+                .to_string(),
+            "test.xml:4: <geom> attribute `densty`: not an attribute",
+        ),
+        (
+            "<mujoco>\n<compiler angel=\"radian\"/>\n<worldbody>\n<body>\n<geom size=\"1\"/>\n\
+             </body>\n</worldbody>\n</mujoco>"
+                .to_string(),
+            "test.xml:2: <compiler> attribute `angel`: not an attribute",
+        ),
+        (
+            "<mujoco>\n<worldbody>\n<body>\n<geom size=\"1\"/>\n</body>\n</worldbody>\n\
+             <actuator>\n<motor joint=\"j\" forcerange=\"-1 1\"/>\n</actuator>\n</mujoco>"
+                .to_string(),
+            "test.xml:8: <motor> attribute `forcerange`: not an attribute",
+        ),
+        (
             "<mujoco>\n<worldbody>\n<body>\n<geom size=\"1\"\n</body>".to_string(),
             "test.xml:4: not well-formed XML: <geom>:",
         ),
@@ -291,6 +318,21 @@ fn malformed_documents_name_line_element_and_attribute() {
             .to_string();
         assert!(message.contains(expected), "`{expected}` not in: {message}");
     }
+}
+
+/// Visual attributes are ignored and MuJoCo's contact settings accepted (with a warning that
+/// they are not simulated): the model is the one without them.
+#[test]
+fn visual_and_unsimulated_attributes_leave_the_model_unchanged() {
+    let doc = |extra: &str| {
+        format!(
+            "<mujoco><worldbody><body name=\"b\"><freejoint/><geom size=\"0.1\" {extra}/>\
+             </body></worldbody></mujoco>"
+        )
+    };
+    let plain = model_from_mjcf_str(&doc(""), "plain.xml").unwrap();
+    let decorated = doc("rgba=\"1 0 0 1\" group=\"2\" material=\"m\" condim=\"6\" margin=\"0.01\"");
+    assert_eq!(model_from_mjcf_str(&decorated, "plain.xml").unwrap(), plain);
 }
 
 /// A joint away from its body's origin puts the link frame at the joint: the geom and the

@@ -11,12 +11,15 @@
 //! A body's joint may sit away from the body's origin (`<joint pos>`); the importer puts the
 //! link frame at the joint, with the body's orientation, and expresses the body's geoms, mass
 //! and children from there. A body without a joint is welded to its parent (a fixed joint).
-//! Anything outside the subset is an error naming the element, the attribute and the line.
+//! Anything outside the subset is an error naming the element, the attribute and the line;
+//! visual attributes are ignored, and MuJoCo's contact and solver settings are accepted with a
+//! warning that they are not simulated (`schema`).
 
 mod actuators;
 mod defaults;
 mod geoms;
 mod inertia;
+mod schema;
 mod xml;
 
 use std::collections::HashSet;
@@ -85,7 +88,10 @@ pub fn model_from_mjcf_str(text: &str, source_name: &str) -> Result<MjcfModel, A
             "the root element of an MJCF file is `<mujoco>`".into(),
         ));
     }
-    Importer::new(&root, source_name)?.import(&root)
+    let unsimulated = schema::check_document(&root, source_name)?;
+    let model = Importer::new(&root, source_name)?.import(&root)?;
+    unsimulated.warn(source_name);
+    Ok(model)
 }
 
 /// A geom's collision class: MuJoCo's `contype` and `conaffinity`.

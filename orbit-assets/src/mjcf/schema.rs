@@ -1,0 +1,161 @@
+//! The attributes the importer takes on each MJCF element. An attribute outside an element's
+//! lists is an error naming it and its line, so that a typo (`densty`) or an attribute the
+//! importer cannot simulate never changes a model silently. Visual and bookkeeping attributes
+//! are ignored (docs/configs.md lists them); MuJoCo's contact and solver settings that the
+//! engines do not simulate are accepted with a warning that names each one and its lines.
+
+use std::collections::BTreeMap;
+
+use super::xml::{Element, mjcf_error};
+use crate::error::AssetError;
+
+/// An element's attributes: those the importer reads (with the pose attributes, if `posed`),
+/// those it ignores (visual), those it accepts without simulating them (warned).
+struct Schema {
+    posed: bool,
+    read: &'static [&'static str],
+    ignored: &'static [&'static str],
+    not_simulated: &'static [&'static str],
+}
+
+/// The position and orientation attributes of an element placed in its body's frame.
+const POSE: &[&str] = &["pos", "quat", "euler", "axisangle", "zaxis", "xyaxes"];
+/// Attributes that only draw or label: MuJoCo's rendering groups, colours and user data.
+const VISUAL: &[&str] = &["rgba", "material", "group", "user"];
+
+/// The schema of the elements the importer reads; `None` for an element it does not read.
+#[rustfmt::skip]
+fn schema(element: &str) -> Option<Schema> {
+    let s = |posed, read, ignored, not_simulated| {
+        Some(Schema { posed, read, ignored, not_simulated })
+    };
+    match element {
+        "mujoco" => s(false, &["model"], &[], &[]),
+        "default" => s(false, &["class"], &[], &[]),
+        "compiler" => s(false,
+            &["angle", "inertiafromgeom", "eulerseq", "coordinate", "autolimits"],
+            &["meshdir", "texturedir", "assetdir", "strippath", "discardvisual", "usethread"],
+            &[]),
+        "option" => s(false, &["timestep"], &[],
+            &["integrator", "iterations", "ls_iterations", "solver", "tolerance", "cone",
+              "impratio", "jacobian", "noslip_iterations", "gravity"]),
+        "body" => s(true, &["name", "childclass"], &["user"], &[]),
+        "joint" => s(false,
+            &["name", "type", "pos", "axis", "limited", "range", "stiffness", "armature",
+              "damping", "frictionloss"],
+            &["group", "user"],
+            &["solreflimit", "solimplimit", "solreffriction", "solimpfriction", "margin"]),
+        "freejoint" => s(false, &["name"], &["group"], &[]),
+        "geom" => s(true,
+            &["name", "type", "size", "fromto", "contype", "conaffinity", "friction", "density",
+              "mass"],
+            VISUAL,
+            &["condim", "priority", "solmix", "solref", "solimp", "margin", "gap"]),
+        "site" => s(true, &["name"], &["type", "size", "fromto", "rgba", "material", "group", "user"], &[]),
+        "inertial" => s(true, &["mass", "diaginertia", "fullinertia"], &[], &[]),
+        "motor" => s(false, &["name", "joint", "gear", "ctrllimited", "ctrlrange"], &["group", "user"], &[]),
+        "exclude" => s(false, &["name", "body1", "body2"], &[], &[]),
+        _ => None,
+    }
+}
+
+/// Attributes accepted without being simulated, with the lines they stand on, for one warning
+/// per attribute at the end of an import.
+#[derive(Debug, Default)]
+pub(crate) struct Unsimulated(BTreeMap<(String, String), Vec<usize>>);
+
+impl Unsimulated {
+    /// Logs one warning per attribute, naming the element, the file and the lines.
+    pub fn warn(&self, file: &str) {
+        for ((element, attribute), lines) in &self.0 {
+            let lines: Vec<String> = lines.iter().map(usize::to_string).collect();
+            tracing::warn!(
+                "{file}: `{attribute}` of `<{element}>` (line {}) is not simulated: the \
+                 engines use their own contact and solver settings (docs/physics.md)",
+                lines.join(", ")
+            );
+        }
+    }
+}
+
+/// Checks `element`'s own attributes against its schema (`as_element`: the element whose
+/// schema applies, for a `<default>`'s children). Elements the importer does not read pass.
+pub(crate) fn check(
+    file: &str,
+    element: &Element,
+    as_element: &str,
+    unsimulated: &mut Unsimulated,
+) -> Result<(), AssetError> {
+    let Some(schema) = schema(as_element) else {
+        return Ok(());
+    };
+    for (key, _) in &element.attrs {
+        let key = key.as_str();
+        // `class` selects a default class on every element that has one.
+        let read = schema.read.contains(&key) || (schema.posed && POSE.contains(&key));
+        if key == "class" || read || schema.ignored.contains(&key) {
+            continue;
+        }
+        if schema.not_simulated.contains(&key) {
+            let lines = (unsimulated.0)
+                .entry((as_element.to_string(), key.to_string()))
+                .or_default();
+            lines.push(element.line);
+            continue;
+        }
+        let pose = if schema.posed { POSE } else { &[] };
+        let mut known: Vec<&str> = (schema.read.iter().chain(pose).chain(schema.not_simulated))
+            .copied()
+            .collect();
+        known.sort_unstable();
+        return Err(mjcf_error(
+            file,
+            element.line,
+            &element.name,
+            Some(key),
+            format!(
+                "not an attribute the importer takes on `<{as_element}>`; it takes {}{}",
+                known.join(", "),
+                if schema.ignored.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (and ignores {})", schema.ignored.join(", "))
+                }
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the attributes of every element the importer reads: `<compiler>`, `<option>`, the
+/// world body's tree, motors, contact exclusions and the elements of `<default>` classes.
+pub(crate) fn check_document(root: &Element, file: &str) -> Result<Unsimulated, AssetError> {
+    let mut unsimulated = Unsimulated::default();
+    check(file, root, "mujoco", &mut unsimulated)?;
+    for section in &root.children {
+        match section.name.as_str() {
+            "compiler" | "option" => check(file, section, &section.name, &mut unsimulated)?,
+            "worldbody" | "default" => check_tree(file, section, &mut unsimulated)?,
+            "actuator" | "contact" => {
+                for element in &section.children {
+                    check(file, element, &element.name, &mut unsimulated)?;
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(unsimulated)
+}
+
+/// [`check`] on `element` and every element below it.
+fn check_tree(
+    file: &str,
+    element: &Element,
+    unsimulated: &mut Unsimulated,
+) -> Result<(), AssetError> {
+    check(file, element, &element.name, unsimulated)?;
+    for child in &element.children {
+        check_tree(file, child, unsimulated)?;
+    }
+    Ok(())
+}
