@@ -6,6 +6,7 @@ use std::path::Path;
 use orbit_core::config::{Bundled, ConfigError, Node};
 use orbit_core::scene::{ArticulationModel, AssetSource, SceneCfg, SceneDesc};
 
+use crate::asset_paths::is_explicit_path;
 use crate::compose::compose_scene;
 use crate::error::AssetError;
 use crate::mjcf::{model_from_mjcf_file, model_from_mjcf_str};
@@ -121,10 +122,12 @@ fn scene_cfg(doc: &mut Node, overrides: &[String]) -> Result<SceneCfg, ConfigErr
 
 /// Loads an articulation model from its source.
 ///
-/// `Urdf { path }` and `Mjcf { path }` are resolved as: the file at `path` (absolute, or
-/// relative to `base_dir` when given, else to the working directory) if it exists; otherwise
-/// the bundled asset named `path`; otherwise [`AssetError::NotFound`] listing the file tried and
-/// the bundled names. `Model(m)` is returned as is.
+/// `Urdf { path }` and `Mjcf { path }` are resolved as: the bundled asset named `path`, unless
+/// the path is explicit (absolute, `./…` or `../…`); otherwise the file at `path` (absolute, or
+/// relative to `base_dir` when given, else to the working directory); otherwise
+/// [`AssetError::NotFound`] listing the file tried and the bundled names. Configs loaded as
+/// env documents have their paths made absolute first (`anchor_asset_paths`). `Model(m)` is
+/// returned as is.
 pub fn load_model(
     source: &AssetSource,
     base_dir: Option<&Path>,
@@ -161,8 +164,15 @@ enum Found {
     Bundled(&'static str),
 }
 
-/// The file `path` (relative to `base_dir` when given), else the bundled file of that name.
+/// The bundled file named `path` unless the path is explicit (absolute, `./…`, `../…`; see
+/// [`is_explicit_path`]), else the file at `path` (relative to `base_dir` when given): a file
+/// that happens to share a bundled asset's name never replaces it.
 fn find_file(path: &str, base_dir: Option<&Path>) -> Result<Found, AssetError> {
+    if !is_explicit_path(path)
+        && let Some(text) = bundled(path)
+    {
+        return Ok(Found::Bundled(text));
+    }
     let given = Path::new(path);
     let candidate = match base_dir {
         Some(base) if given.is_relative() => base.join(given),
@@ -170,9 +180,6 @@ fn find_file(path: &str, base_dir: Option<&Path>) -> Result<Found, AssetError> {
     };
     if candidate.is_file() {
         return Ok(Found::File(candidate));
-    }
-    if let Some(text) = bundled(path) {
-        return Ok(Found::Bundled(text));
     }
     Err(AssetError::NotFound {
         path: path.to_string(),

@@ -44,13 +44,16 @@ pub fn compose_scene(scene: &mut Node, path: &str) -> Result<(), ConfigError> {
     Ok(())
 }
 
-/// An env config document with its `scene` field composed (see [`compose_scene`]).
+/// An env config document with its `scene` field composed (see [`compose_scene`]) and its
+/// model files' paths anchored to the files that name them
+/// ([`anchor_asset_paths`](crate::anchor_asset_paths)).
 pub fn compose_env_scene(document: &Node) -> Result<Node, ConfigError> {
     let mut document = document.clone();
     if let NodeKind::Struct { fields, .. } = &mut document.kind
         && let Some((_, scene)) = fields.iter_mut().find(|(f, _)| f == "scene")
     {
         compose_scene(scene, "scene")?;
+        crate::anchor_asset_paths(scene);
     }
     Ok(document)
 }

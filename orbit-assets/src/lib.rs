@@ -18,11 +18,13 @@
 //! - [`box_pushing_scene_cfg`]: that scene as an [`orbit_core::scene::SceneCfg`], with
 //!   command-line style overrides.
 //! - [`load_model`] / [`model_loader`]: resolve an [`orbit_core::scene::AssetSource`] against
-//!   the file system and the bundled assets.
+//!   the file system and the bundled assets; [`anchor_asset_paths`] makes a config's file paths
+//!   relative to the config file that names them, [`asset_record`] lists what it loads.
 
 #![warn(missing_docs)]
 
 mod asset_cfg;
+mod asset_paths;
 mod bundled;
 mod compose;
 mod error;
@@ -30,6 +32,7 @@ mod mjcf;
 mod urdf;
 
 pub use asset_cfg::{AssetCfgDef, AssetKind, asset_cfg, asset_cfgs};
+pub use asset_paths::{anchor_asset_paths, asset_record, is_explicit_path};
 pub use bundled::{
     box_pushing_scene, box_pushing_scene_cfg, bundled, bundled_names, load_model, load_scene,
     model_loader, resolve_scene,
