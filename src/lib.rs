@@ -124,20 +124,36 @@ pub fn choose_run_backend(
     env: &std::path::Path,
     overrides: &mut Vec<String>,
 ) -> Result<core::physics::BackendChoice, managers::EnvError> {
+    let choice = pick_run_backend(env, overrides)?;
+    if let Some(line) = backend_choice_line(&choice) {
+        println!("{line}");
+    }
+    Ok(choice)
+}
+
+/// [`choose_run_backend`] without printing (a library's caller says it its own way).
+pub fn pick_run_backend(
+    env: &std::path::Path,
+    overrides: &mut Vec<String>,
+) -> Result<core::physics::BackendChoice, managers::EnvError> {
     let doc = managers::load_env_config(env, overrides)?;
     let name: String = match core::config::node_at(&doc, "sim.backend") {
         Some(node) => core::config::from_node(node)?,
         None => core::physics::AUTO_BACKEND.to_string(),
     };
     let choice = core::physics::choose_backend(&name)?;
-    if let Some(reason) = &choice.reason {
-        println!(
-            "physics: `{}` (sim.backend \"auto\" chose it, {reason})",
-            choice.name
-        );
-    }
     overrides.extend(run_overrides(None, None, Some(&choice.name), &[]));
     Ok(choice)
+}
+
+/// What `sim.backend = "auto"` chose and why, if it chose.
+pub fn backend_choice_line(choice: &core::physics::BackendChoice) -> Option<String> {
+    (choice.reason.as_ref()).map(|reason| {
+        format!(
+            "physics: `{}` (sim.backend \"auto\" chose it, {reason})",
+            choice.name
+        )
+    })
 }
 
 /// Common command-line flags of the examples (Isaac Lab's names), turned into overrides.
@@ -166,6 +182,7 @@ pub mod distributed;
 pub mod learner;
 pub mod npy;
 pub mod play;
+pub mod run_params;
 pub mod signals;
 pub mod train;
 

@@ -47,6 +47,10 @@ pub struct PlayArgs {
     /// Episodes to play per env.
     #[arg(long, default_value_t = 1)]
     pub episodes: usize,
+    /// Build the env from the task's registered configs, not from the `params/` of the run
+    /// that wrote the checkpoint (the default, so that the env is the one it trained in).
+    #[arg(long)]
+    pub registered_config: bool,
     /// Env overrides `env.<path>=<value>` and black-box overrides `bb.<path>=<value>`.
     pub overrides: Vec<String>,
 }
@@ -102,7 +106,7 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     check_task(args.task.as_deref())?;
     let overrides = split_overrides(&args.overrides);
-    let configs = crate::RunConfigs::resolve(
+    let mut configs = crate::RunConfigs::resolve(
         args.task.as_deref(),
         crate::DEFAULT_TASK,
         args.env.task_config.as_deref(),
@@ -125,6 +129,16 @@ pub fn play(args: &PlayArgs) -> Result<(), Box<dyn std::error::Error>> {
         &args.load_run,
         args.checkpoint.as_deref(),
     )?;
+    let given = crate::run_params::GivenFiles {
+        registered: args.registered_config,
+        env: args.env.task_config.is_some(),
+        agent: true,
+        black_box: args.bb_config.is_some(),
+    };
+    println!(
+        "{}",
+        crate::run_params::choose_configs(&mut configs, &base, given)
+    );
     let policy = Policy::load(&base, Device::flex())?;
     let e = &args.env;
     let mut env_overrides =

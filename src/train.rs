@@ -19,6 +19,9 @@ pub use ranks::{AUTO_MIN_ENVS_PER_RANK, AUTO_RANKS_MAX, RankCount, thread_ranks}
 pub const AGENT_CONFIG_FILE: &str = "agent.ron";
 /// The black-box config in a run's `params/` (`--bb-config` takes it back).
 pub const BLACK_BOX_CONFIG_FILE: &str = "black_box.ron";
+/// The model files a run loaded, in its `params/`: each path, where it was loaded from and the
+/// SHA-256 of its bytes.
+pub const ASSETS_FILE: &str = "assets.ron";
 
 /// Flags of `train` (Isaac Lab's names).
 #[derive(Parser, Debug, Clone)]
@@ -43,9 +46,14 @@ pub struct TrainArgs {
     /// Training iterations (default: the agent config's).
     #[arg(long)]
     pub max_iterations: Option<usize>,
-    /// Continue from a checkpoint (see `--load-run`, `--checkpoint`).
+    /// Continue from a checkpoint (see `--load-run`, `--checkpoint`), with the env, agent and
+    /// black-box configs of the run that wrote it (its `params/`), unless
+    /// `--registered-config` or a config file is given.
     #[arg(long)]
     pub resume: bool,
+    /// With `--resume`: build from the task's registered configs, not the run's `params/`.
+    #[arg(long)]
+    pub registered_config: bool,
     /// Run directory to resume from: a regex matched at the start of the names under
     /// `<log-root>/<experiment>/`; the last match (the newest run) is taken.
     #[arg(long, default_value = ".*")]
@@ -108,6 +116,8 @@ pub struct ResolvedRun {
     pub physics_on_cpu: bool,
     /// The physics backend's name.
     pub backend: String,
+    /// The checkpoint a `--resume` run continues from.
+    pub resume_from: Option<PathBuf>,
 }
 
 /// Config overrides sorted by target.
@@ -137,6 +147,9 @@ pub(crate) fn split_overrides(tokens: &[String]) -> Overrides {
 /// overrides, as in Isaac Lab), and the env overrides: the agent's `env_overrides`, then the
 /// user's, then `num_envs`, the seed (the agent's, as Isaac Lab's script copies it) and the
 /// backend.
+///
+/// A `--resume` run finds its checkpoint with the task's agent config, then builds from the
+/// configs in that run's `params/` (those not given as files), unless `--registered-config`.
 pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     crate::link_registrations();
     check_task(args.task.as_deref())?;
@@ -148,6 +161,36 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         args.agent_config.as_deref(),
         args.bb_config.as_deref(),
     )?;
+    if !args.resume {
+        return resolve_configs(args, configs, false);
+    }
+    let first = resolve_configs(args, configs.clone(), true)?;
+    let checkpoint = find_checkpoint(
+        &args.log_root.join(&first.agent.experiment_name),
+        &args.load_run,
+        args.checkpoint.as_deref(),
+    )?;
+    let given = crate::run_params::GivenFiles {
+        registered: args.registered_config,
+        env: e.task_config.is_some(),
+        agent: args.agent_config.is_some(),
+        black_box: args.bb_config.is_some(),
+    };
+    println!(
+        "{}",
+        crate::run_params::choose_configs(&mut configs, &checkpoint, given)
+    );
+    let mut run = resolve_configs(args, configs, false)?;
+    run.resume_from = Some(checkpoint);
+    Ok(run)
+}
+
+/// [`resolve`] with the config files chosen (`quiet`: print nothing; a first pass).
+fn resolve_configs(
+    args: &TrainArgs,
+    mut configs: crate::RunConfigs,
+    quiet: bool,
+) -> Result<ResolvedRun, RlError> {
     let Overrides {
         env: user_env,
         agent: mut agent_overrides,
@@ -156,19 +199,25 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
     // The backend is fixed before the agent config is chosen: physics on the CPU trains with
     // the task's config sized for CPUs, if it has one.
     let mut probe = crate::run_overrides(None, None, args.env.backend.as_deref(), &user_env);
-    let backend = crate::choose_run_backend(&configs.env, &mut probe)?;
+    let backend = if quiet {
+        crate::pick_run_backend(&configs.env, &mut probe)?
+    } else {
+        crate::choose_run_backend(&configs.env, &mut probe)?
+    };
     if backend.probe.kind.is_cpu()
         && let Some(cpu_agent) = configs.cpu_agent.take()
     {
-        println!(
-            "training config: {} (the physics runs on the CPU; --agent-config {} trains with \
+        if !quiet {
+            println!(
+                "training config: {} (the physics runs on the CPU; --agent-config {} trains with \
              the GPU-sized one)",
-            cpu_agent.display(),
-            configs
-                .agent
-                .as_ref()
-                .map_or(String::new(), |a| a.display().to_string())
-        );
+                cpu_agent.display(),
+                configs
+                    .agent
+                    .as_ref()
+                    .map_or(String::new(), |a| a.display().to_string())
+            );
+        }
         configs.agent = Some(cpu_agent);
     }
     let agent_file = agent_file(&configs)?;
@@ -190,7 +239,7 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         agent_overrides.push(format!("run_name={r:?}"));
     }
     let agent_doc = orbit_managers::load_config(&agent_file, &agent_overrides)
-        .map_err(|err| RlError::EnvMismatch(err.to_string()))?;
+        .map_err(|err| RlError::AgentConfig(err.to_string()))?;
     let agent: RunnerCfg = orbit_core::config::from_node(&agent_doc)?;
     agent.validate(&agent_file.display().to_string())?;
     let mut env_overrides = agent.env_overrides.clone();
@@ -210,6 +259,7 @@ pub fn resolve(args: &TrainArgs) -> Result<ResolvedRun, RlError> {
         black_box_overrides,
         physics_on_cpu: backend.probe.kind.is_cpu(),
         backend: backend.name,
+        resume_from: None,
     })
 }
 
@@ -247,7 +297,7 @@ pub(crate) fn check_black_box_overrides(
 /// The training config of a run, or an error naming the trainable tasks.
 pub(crate) fn agent_file(configs: &crate::RunConfigs) -> Result<PathBuf, RlError> {
     configs.agent.clone().ok_or_else(|| {
-        RlError::EnvMismatch(format!(
+        RlError::AgentConfig(format!(
             "`{}` has no training config: pass one with --agent-config FILE, or train a task \
              that has one: {:?}",
             configs.name,
@@ -267,7 +317,8 @@ fn trainable_tasks() -> Vec<String> {
 
 /// Writes the run's resolved configs into `<dir>/params/`: `env.ron` (`env_doc`), `agent.ron`
 /// and, for a black-box run, `black_box.ron`, each a self-contained file (includes merged,
-/// overrides applied) that `--task-config`, `--agent-config` and `--bb-config` take back.
+/// overrides applied) that `--task-config`, `--agent-config` and `--bb-config` take back;
+/// `assets.ron`, the model files loaded; for a resumed run, the checkpoint it continued.
 fn write_params(
     dir: &Path,
     run: &ResolvedRun,
@@ -278,10 +329,15 @@ fn write_params(
     let mut files = vec![
         (ENV_CONFIG_FILE, env_doc.to_ron()),
         (AGENT_CONFIG_FILE, run.agent_doc.to_ron()),
+        (ASSETS_FILE, orbit_assets::asset_record(env_doc)),
     ];
     if let Some(bb) = &run.configs.black_box {
         let doc = orbit_managers::load_config(bb, &run.black_box_overrides)?;
         files.push((BLACK_BOX_CONFIG_FILE, doc.to_ron()));
+    }
+    if let Some(checkpoint) = &run.resume_from {
+        let text = crate::run_params::resumed_from_text(checkpoint);
+        files.push((crate::run_params::RESUMED_FROM_FILE, text));
     }
     for (name, text) in files {
         let path = params.join(name);
@@ -342,19 +398,26 @@ fn train_rank(
             .push(format!("seed={}", run.agent.seed + r.rank() as u64));
     }
     let cfg = run.agent.clone();
-    let resume_from = if args.resume {
-        Some(find_checkpoint(
-            &args.log_root.join(&cfg.experiment_name),
-            &args.load_run,
-            args.checkpoint.as_deref(),
-        )?)
-    } else {
-        None
-    };
+    let resume_from = run.resume_from.clone();
     // `params/env.ron` holds the run's envs, all of them: it repeats the run.
     let env_doc = orbit_managers::load_env_config(&run.configs.env, &run.env_overrides)?;
     if let Some(n) = orbit_core::config::node_at(&env_doc, "num_envs") {
         let n = orbit_core::config::from_node::<usize>(n)? / share;
+        if n == 0 {
+            return Err(RlError::InvalidConfig {
+                file: run.configs.env.display().to_string(),
+                field: "num_envs".into(),
+                message: format!(
+                    "a run needs at least one env{}: raise --num-envs (or `env.num_envs`)",
+                    if share > 1 {
+                        format!(" per rank ({share} ranks)")
+                    } else {
+                        String::new()
+                    }
+                ),
+            }
+            .into());
+        }
         cfg.validate_batch(n, &agent_file(&run.configs)?.display().to_string())?;
         if share > 1 {
             run.env_overrides.push(format!("num_envs={n}"));
@@ -395,7 +458,17 @@ fn train_rank(
     if let Some(r) = rank {
         runner.distribute(r.collective.clone());
     }
-    runner.learn(cfg.max_iterations)?;
+    if let Err(e) = runner.learn(cfg.max_iterations) {
+        // A run that failed before finishing an iteration holds no checkpoint, no curve and
+        // only the configs it was given: leave no such directory behind.
+        if runner.history.is_empty()
+            && !matches!(e, RlError::Interrupted { .. })
+            && let Some(dir) = runner.log_dir()
+        {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+        return Err(e.into());
+    }
     if let Some(dir) = runner.log_dir() {
         // A resumed run's curves continue those of the run it resumed from.
         let history = match &resume_from {
