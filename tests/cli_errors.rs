@@ -99,23 +99,27 @@ fn black_box_overrides_on_a_step_based_task_are_errors() {
     assert!(message.contains("step-based"), "{message}");
 }
 
-/// A time step far too long for the arm's drives blows the state up in the first step: `train`
+/// A time step far too long for the arm's drives (a second, the longest `sim.dt` allowed)
+/// blows the state up in the first step: `train`
 /// reports it as a physics failure naming the joint, the env and what to change, not as a
 /// diverging policy.
 #[test]
 fn a_physics_blow_up_is_a_physics_error() {
     let root = std::env::temp_dir().join(format!("orbit-blow-up-{}", std::process::id()));
-    let message = reach_train_error(&root, &["--max-iterations", "1", "env.sim.dt=10.0"]);
+    let message = reach_train_error(&root, &["--max-iterations", "1", "env.sim.dt=1.0"]);
     for part in [
         "physics became unstable in env step 1",
         "of articulation `robot`",
         "in env 0",
-        "4 of 4 envs",
+        "of 4 envs out of range",
         "Lower `sim.dt`",
     ] {
         assert!(message.contains(part), "`{part}` missing: {message}");
     }
     assert!(!message.contains("diverged"), "{message}");
+    // The run failed in its first step: it leaves no run directory behind.
+    let runs = std::fs::read_dir(root.join("franka_reach")).map_or(0, |d| d.count());
+    assert_eq!(runs, 0, "a run directory was left behind");
     let _ = std::fs::remove_dir_all(&root);
 }
 
@@ -130,6 +134,11 @@ fn override_errors_name_the_override_and_minibatches_are_checked_first() {
     let message = run("env.sim.dtx=0.1");
     assert!(
         message.starts_with("override `sim.dtx=0.1`: sim.dtx: unknown field `dtx`"),
+        "{message}"
+    );
+    let message = run("agent.algorithm.learning_rate=fast");
+    assert!(
+        message.starts_with("agent config: override `algorithm.learning_rate=fast`"),
         "{message}"
     );
     let message = run("agent.algorithm.num_mini_batches=1000");
@@ -169,7 +178,7 @@ fn examples_print_error_messages_not_debug_structs() {
         (
             "random_agent",
             &["--set", "sim.dt=-1.0"],
-            "sim.dt must be a positive",
+            "sim.dt: -1 is out of range: expected 0.000001 to 1 seconds",
         ),
         (
             "benchmark",
@@ -194,14 +203,14 @@ fn examples_print_error_messages_not_debug_structs() {
     }
 }
 
-/// `--num-envs 100000000` on the CPU backend fails at once with the memory it would need,
+/// `--num-envs 10000000` on the CPU backend fails at once with the memory it would need,
 /// instead of allocating until the machine runs out.
 #[test]
 fn envs_beyond_the_memory_fail_fast() {
     let args = AgentArgs::parse_from([
         "zero_agent",
         "--num-envs",
-        "100000000",
+        "10000000",
         "--steps",
         "1",
         "--backend",
@@ -209,7 +218,7 @@ fn envs_beyond_the_memory_fail_fast() {
     ]);
     let message = run(&args, true).unwrap_err().to_string();
     assert!(
-        message.contains("100000000 envs on the `rapier` backend need at least"),
+        message.contains("10000000 envs on the `rapier` backend need at least"),
         "{message}"
     );
 }

@@ -80,7 +80,7 @@ fn auto_ranks_follow_the_cores_and_the_envs() {
 #[test]
 fn a_rank_failure_is_the_runs_error() {
     let root = std::env::temp_dir().join(format!("orbit-rank-failure-{}", std::process::id()));
-    let args = reach_args(&root, &["--ranks", "2", "env.sim.dt=10.0"]);
+    let args = reach_args(&root, &["--ranks", "2", "env.sim.dt=1.0"]);
     let message = train(&args, false).err().expect("an error").to_string();
     assert!(message.contains("physics became unstable"), "{message}");
     let _ = std::fs::remove_dir_all(&root);

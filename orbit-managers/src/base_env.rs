@@ -201,6 +201,7 @@ impl ManagerBasedEnv {
     pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
         let doc = &orbit_assets::compose_env_scene(doc)?;
         let cfg: EnvCfg = orbit_core::config::from_node(doc)?;
+        crate::ranges::check_env_cfg(doc, &cfg)?;
         let mut env = Self::build(doc, cfg, u32::MAX)?;
         env.apply_startup_events()?;
         Ok(env)
@@ -213,18 +214,13 @@ impl ManagerBasedEnv {
     }
 
     /// Builds scene and managers in Isaac Lab's order (command, action, observation, event);
-    /// startup events are left to the caller, which may add managers first.
+    /// startup events are left to the caller, which may add managers first. The caller has
+    /// checked the config's ranges (`ranges::check_env_cfg`).
     pub(crate) fn build(
         doc: &Node,
         cfg: EnvCfg,
         max_episode_length: u32,
     ) -> Result<Self, EnvError> {
-        if cfg.decimation == 0 {
-            return Err(EnvError::InvalidTerm {
-                field: "decimation".into(),
-                message: "expected at least 1 physics step per env step".into(),
-            });
-        }
         let file = doc.span.file.display().to_string();
         let desc = orbit_assets::resolve_scene(&cfg.scene, &file, None)?;
         let backend = build_backend(&desc, cfg.num_envs, &cfg.sim)?;
@@ -298,6 +294,13 @@ impl ManagerBasedEnv {
             .iter()
             .find(|g| g.name == name)
             .map(|g| (g.values.as_slice(), g.dim))
+    }
+
+    /// The term of observation group `group` that writes value `index` of a row, as
+    /// `<term>[k]`.
+    pub fn observation_term_at(&self, group: &str, index: usize) -> Option<String> {
+        let g = self.observations.groups.iter().find(|g| g.name == group)?;
+        g.term_at(index)
     }
 
     /// The command manager.

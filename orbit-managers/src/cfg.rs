@@ -207,66 +207,228 @@ pub struct EnvCfg {
     pub viewer: ViewerCfg,
 }
 
-/// A manager-based RL environment config (Isaac Lab `ManagerBasedRLEnvCfg`): the fields of
-/// [`EnvCfg`] plus the episode length, rewards, terminations and curriculum.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// A manager-based RL environment config (Isaac Lab `ManagerBasedRLEnvCfg`, which extends
+/// `ManagerBasedEnvCfg`): the base env's config plus the episode length, rewards, terminations
+/// and curriculum. In RON it is one flat struct: the base's fields and these side by side.
+#[derive(Clone, Debug)]
 pub struct RlEnvCfg {
-    /// Base seed of every per-env random stream.
-    #[serde(default)]
-    pub seed: u64,
-    /// Number of environments.
-    pub num_envs: usize,
-    /// Physics steps per env step.
-    pub decimation: usize,
+    /// The base env's config (scene, physics, actions, observations, events, commands).
+    pub base: EnvCfg,
     /// Episode length in seconds (`max_episode_length = ceil(T / (dt · decimation) − 1e-4)`, the
     /// small margin absorbing float rounding so 2 s at 20 ms is exactly 100 steps).
     pub episode_length_s: f32,
-    /// Physics settings, including the backend name.
-    #[serde(default)]
-    pub sim: SimCfg,
-    /// The scene: its entities by name, each from a registered asset config
-    /// (`"robot": (asset: "franka_panda_rod", …)`, see `orbit_assets::compose_scene`) or
-    /// given whole.
-    pub scene: SceneCfg,
-    /// Action terms (concatenated in order).
-    pub actions: Terms<FuncTermCfg>,
-    /// Observation groups.
-    pub observations: Terms<ObservationGroupCfg>,
     /// Reward terms.
-    #[serde(default)]
     pub rewards: Terms<RewardTermCfg>,
     /// Termination terms.
-    #[serde(default)]
     pub terminations: Terms<TerminationTermCfg>,
-    /// Event terms.
-    #[serde(default)]
-    pub events: Terms<EventTermCfg>,
-    /// Command terms.
-    #[serde(default)]
-    pub commands: Terms<CommandTermCfg>,
     /// Curriculum terms (run when envs reset).
-    #[serde(default)]
     pub curriculum: Terms<FuncTermCfg>,
-    /// The camera of rendered frames and videos (`--video`).
-    #[serde(default)]
-    pub viewer: ViewerCfg,
 }
 
-impl RlEnvCfg {
-    /// The base-environment part of this config.
-    pub fn base(&self) -> EnvCfg {
-        EnvCfg {
-            seed: self.seed,
-            num_envs: self.num_envs,
-            decimation: self.decimation,
-            sim: self.sim.clone(),
-            scene: self.scene.clone(),
-            actions: self.actions.clone(),
-            observations: self.observations.clone(),
-            events: self.events.clone(),
-            commands: self.commands.clone(),
-            viewer: self.viewer.clone(),
+/// Every field of an RL env config: [`EnvCfg`]'s, in declaration order, then those
+/// [`RlEnvCfg`] adds.
+#[rustfmt::skip]
+const RL_ENV_FIELDS: &[&str] = &[
+    "seed", "num_envs", "decimation", "sim", "scene", "actions", "observations", "events",
+    "commands", "viewer",
+    "episode_length_s", "rewards", "terminations", "curriculum",
+];
+
+/// The fields of [`EnvCfg`], in declaration order.
+pub const ENV_FIELDS: &[&str] = RL_ENV_FIELDS.split_at(10).0;
+
+/// The fields [`RlEnvCfg`] adds to [`EnvCfg`].
+const RL_FIELDS: &[&str] = RL_ENV_FIELDS.split_at(10).1;
+
+impl<'de> Deserialize<'de> for RlEnvCfg {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_struct("RlEnvCfg", RL_ENV_FIELDS, rl_de::RlEnvCfgVisitor)
+    }
+}
+
+/// Reading one flat struct into [`RlEnvCfg`]: the base's fields go to [`EnvCfg`]'s own
+/// deserialiser, the RL fields are taken out on the way, so unknown fields stay errors at
+/// their line.
+mod rl_de {
+    use serde::de::{self, DeserializeSeed, IntoDeserializer, MapAccess, Visitor};
+
+    use super::*;
+
+    pub(super) struct RlEnvCfgVisitor;
+
+    impl<'de> Visitor<'de> for RlEnvCfgVisitor {
+        type Value = RlEnvCfg;
+
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("an RL env config struct")
         }
+
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<RlEnvCfg, A::Error> {
+            let mut rl = RlFields::default();
+            let split = SplitMap {
+                map: &mut map,
+                rl: &mut rl,
+            };
+            let base = EnvCfg::deserialize(de::value::MapAccessDeserializer::new(split))?;
+            Ok(RlEnvCfg {
+                base,
+                episode_length_s: rl
+                    .episode_length_s
+                    .ok_or_else(|| de::Error::missing_field("episode_length_s"))?,
+                rewards: rl.rewards.unwrap_or_default(),
+                terminations: rl.terminations.unwrap_or_default(),
+                curriculum: rl.curriculum.unwrap_or_default(),
+            })
+        }
+    }
+
+    #[derive(Default)]
+    struct RlFields {
+        episode_length_s: Option<f32>,
+        rewards: Option<Terms<RewardTermCfg>>,
+        terminations: Option<Terms<TerminationTermCfg>>,
+        curriculum: Option<Terms<FuncTermCfg>>,
+    }
+
+    impl RlFields {
+        /// Reads the value of the RL field `field` from `map`.
+        fn read<'de, A: MapAccess<'de>>(
+            &mut self,
+            field: &str,
+            map: &mut A,
+        ) -> Result<(), A::Error> {
+            fn once<T, E: de::Error>(slot: &mut Option<T>, v: T, f: &'static str) -> Result<(), E> {
+                match slot.replace(v) {
+                    None => Ok(()),
+                    Some(_) => Err(E::duplicate_field(f)),
+                }
+            }
+            match field {
+                "episode_length_s" => once(
+                    &mut self.episode_length_s,
+                    map.next_value()?,
+                    "episode_length_s",
+                ),
+                "rewards" => once(&mut self.rewards, map.next_value()?, "rewards"),
+                "terminations" => once(&mut self.terminations, map.next_value()?, "terminations"),
+                _ => once(&mut self.curriculum, map.next_value()?, "curriculum"),
+            }
+        }
+    }
+
+    /// A field name: an RL field, or a base field as the base's deserialiser reads it.
+    enum Key<K> {
+        Rl(&'static str),
+        Base(K),
+    }
+
+    struct KeySeed<'s, K>(&'s mut Option<K>);
+
+    impl<'de, K: DeserializeSeed<'de>> DeserializeSeed<'de> for KeySeed<'_, K> {
+        type Value = Key<K::Value>;
+
+        fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+            let name = String::deserialize(d)?;
+            if let Some(f) = RL_FIELDS.iter().find(|f| **f == name) {
+                return Ok(Key::Rl(f));
+            }
+            if !ENV_FIELDS.contains(&name.as_str()) {
+                return Err(de::Error::unknown_field(&name, RL_ENV_FIELDS));
+            }
+            let seed = self.0.take().expect("a base key is read once per call");
+            seed.deserialize(name.into_deserializer()).map(Key::Base)
+        }
+    }
+
+    /// The map of an RL env config as the base's deserialiser sees it: without the RL fields.
+    struct SplitMap<'a, A> {
+        map: &'a mut A,
+        rl: &'a mut RlFields,
+    }
+
+    impl<'de, A: MapAccess<'de>> MapAccess<'de> for SplitMap<'_, A> {
+        type Error = A::Error;
+
+        fn next_key_seed<K: DeserializeSeed<'de>>(
+            &mut self,
+            seed: K,
+        ) -> Result<Option<K::Value>, A::Error> {
+            let mut seed = Some(seed);
+            loop {
+                match self.map.next_key_seed(KeySeed(&mut seed))? {
+                    None => return Ok(None),
+                    Some(Key::Base(key)) => return Ok(Some(key)),
+                    Some(Key::Rl(field)) => self.rl.read(field, self.map)?,
+                }
+            }
+        }
+
+        fn next_value_seed<V: DeserializeSeed<'de>>(
+            &mut self,
+            seed: V,
+        ) -> Result<V::Value, A::Error> {
+            self.map.next_value_seed(seed)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = "scene: (), actions: {}, observations: {}";
+
+    fn rl(text: &str) -> Result<RlEnvCfg, String> {
+        let doc =
+            orbit_core::config::parse_document(text, "t.ron", &[]).map_err(|e| e.to_string())?;
+        orbit_core::config::from_node(&doc).map_err(|e| e.to_string())
+    }
+
+    /// One flat struct fills the base and the RL fields, in any order.
+    #[test]
+    fn an_rl_env_config_reads_its_base_and_its_own_fields() {
+        let cfg = rl(&format!(
+            "(episode_length_s: 2.5, num_envs: 3, decimation: 2, rewards: {{\"r\": (func: \"f\", weight: 0.5)}}, {SCENE})"
+        ))
+        .unwrap();
+        assert_eq!(
+            (cfg.base.num_envs, cfg.base.decimation, cfg.episode_length_s),
+            (3, 2, 2.5)
+        );
+        assert_eq!(cfg.rewards.0.len(), 1);
+        assert!(cfg.terminations.0.is_empty() && cfg.curriculum.0.is_empty());
+    }
+
+    /// An unknown field is an error at its line that lists every field; a missing or repeated
+    /// RL field is an error too; the list of the base's fields is the base's own.
+    #[test]
+    fn unknown_missing_and_repeated_fields_are_errors() {
+        let e = rl(&format!(
+            "(num_envs: 1, decimation: 1,\n rewardz: {{}}, {SCENE})"
+        ))
+        .unwrap_err();
+        assert!(e.starts_with("t.ron:2:"), "{e}");
+        assert!(
+            e.contains("unknown field `rewardz`") && e.contains("`episode_length_s`"),
+            "{e}"
+        );
+        assert!(e.contains("`viewer`"), "{e}");
+        let e = rl(&format!("(num_envs: 1, decimation: 1, {SCENE})")).unwrap_err();
+        assert!(e.contains("missing field `episode_length_s`"), "{e}");
+        let e = rl(&format!(
+            "(episode_length_s: 1.0, num_envs: 1, decimation: 1, episode_length_s: 2.0, {SCENE})"
+        ))
+        .unwrap_err();
+        assert!(e.contains("episode_length_s"), "{e}");
+        let doc = orbit_core::config::parse_document("(zzz: 1)", "t.ron", &[]).unwrap();
+        let e = orbit_core::config::from_node::<EnvCfg>(&doc)
+            .unwrap_err()
+            .to_string();
+        let listed = ENV_FIELDS
+            .iter()
+            .map(|f| format!("`{f}`"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        assert!(e.contains(&listed), "{e}\n{listed}");
     }
 }

@@ -15,6 +15,7 @@ mod error;
 mod failed_step;
 pub mod managers;
 pub mod mdp;
+pub mod ranges;
 mod rl_env;
 mod scene;
 pub mod task;

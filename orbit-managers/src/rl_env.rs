@@ -85,17 +85,13 @@ impl ManagerBasedRlEnv {
     pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
         let doc = &orbit_assets::compose_env_scene(doc)?;
         let cfg: RlEnvCfg = orbit_core::config::from_node(doc)?;
-        if !(cfg.episode_length_s.is_finite() && cfg.episode_length_s > 0.0) {
-            return Err(EnvError::InvalidTerm {
-                field: "episode_length_s".into(),
-                message: format!("expected a positive duration, got {}", cfg.episode_length_s),
-            });
-        }
-        let step_dt = cfg.sim.dt * cfg.decimation as f32;
+        crate::ranges::check_env_cfg(doc, &cfg.base)?;
+        let step_dt = cfg.base.sim.dt * cfg.base.decimation as f32;
+        crate::ranges::check_episode_length(doc, cfg.episode_length_s, step_dt)?;
         let max_episode_length = (cfg.episode_length_s / step_dt - 1e-4).ceil() as u32;
         // Isaac Lab's order: command, action, observation, event (the base env), then
         // termination, reward, curriculum; startup events once every manager exists.
-        let base = ManagerBasedEnv::build(doc, cfg.base(), max_episode_length)?;
+        let base = ManagerBasedEnv::build(doc, cfg.base.clone(), max_episode_length)?;
         let (scene, actions, commands) = (&base.scene, &base.actions, &base.commands);
         let terminations =
             TerminationManager::new(doc, scene, &base.cfg, &cfg.terminations, actions, commands)?;
@@ -192,6 +188,14 @@ impl ManagerBasedRlEnv {
     pub fn reset(&mut self) -> Result<(), EnvError> {
         let all: Vec<usize> = (0..self.num_envs()).collect();
         self.reset_idx(&all)?;
+        self.base.compute_observations();
+        Ok(())
+    }
+
+    /// Resets the listed envs between steps and computes the observations (a partial reset
+    /// from outside a step, as gymnasium's `reset_mask` asks).
+    pub fn reset_envs(&mut self, env_ids: &[usize]) -> Result<(), EnvError> {
+        self.reset_idx(env_ids)?;
         self.base.compute_observations();
         Ok(())
     }

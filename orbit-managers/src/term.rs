@@ -13,6 +13,8 @@ use crate::scene::Scene;
 pub struct TermContext<'a> {
     /// Field path of the term in the config (for errors), e.g. `rewards.distance`.
     pub field: String,
+    /// Where the term's config was written (the file of an include or an override too).
+    pub at: Option<orbit_core::config::Span>,
     /// The term's `params` node, if given.
     pub params: Option<&'a Node>,
     /// The scene.
@@ -48,10 +50,20 @@ impl TermContext<'_> {
     }
 
     /// An error about this term.
+    /// It names the file, line and column of the term's config where they are known.
     pub fn error(&self, message: impl Into<String>) -> EnvError {
-        EnvError::InvalidTerm {
-            field: self.field.clone(),
-            message: message.into(),
+        match &self.at {
+            Some(span) => EnvError::Config(orbit_core::config::ConfigError::Invalid {
+                file: span.file.to_path_buf(),
+                line: span.line,
+                col: span.col,
+                path: self.field.clone(),
+                message: message.into(),
+            }),
+            None => EnvError::InvalidTerm {
+                field: self.field.clone(),
+                message: message.into(),
+            },
         }
     }
 }
@@ -99,6 +111,11 @@ pub trait ActionTerm: Send + Sync {
     fn reset(&mut self, _env_ids: &[usize]) {}
     /// Processed actions, `num_envs × dim` (e.g. the commanded torques).
     fn processed(&self) -> &[f32];
+    /// The raw action range of each action value beyond which the term's effect no longer
+    /// changes (its clip, or an effort limit divided by the scale); unbounded by default.
+    fn bounds(&self) -> Vec<(f32, f32)> {
+        vec![(f32::NEG_INFINITY, f32::INFINITY); self.dim()]
+    }
     /// For a term that drives joints directly, how its raw actions map onto them (lets a
     /// tracking controller, such as the black-box wrapper's, turn desired joint values into
     /// actions); `None` for other terms.

@@ -149,7 +149,7 @@ fn box_pushing(num_envs: usize) -> orbit_managers::ManagerBasedRlEnv {
 #[test]
 fn box_pushing_frame_shows_the_box_and_its_target() {
     let env = box_pushing(2);
-    let mut renderer = Renderer::new(&env.scene().desc, &env.cfg.viewer, 2).unwrap();
+    let mut renderer = Renderer::new(&env.scene().desc, &env.cfg.base.viewer, 2).unwrap();
     let mut image: Image = renderer.new_image();
     let markers = env.debug_markers(0);
     assert_eq!(markers.len(), 1, "one target marker");
@@ -174,7 +174,7 @@ fn box_pushing_frame_shows_the_box_and_its_target() {
         [r, g, b]
     );
     // A bad viewer setting is refused with the field named.
-    let mut viewer = env.cfg.viewer.clone();
+    let mut viewer = env.cfg.base.viewer.clone();
     viewer.colors.insert("boxx".into(), (1.0, 0.0, 0.0));
     let err = Renderer::new(&env.scene().desc, &viewer, 2).err().unwrap();
     assert!(err.to_string().contains("colors.boxx") && err.to_string().contains("\"box\""));
@@ -232,7 +232,7 @@ fn videos_start_every_interval_with_one_frame_per_step() {
 #[test]
 fn frames_do_not_depend_on_the_thread_count() {
     let env = box_pushing(1);
-    let mut renderer = Renderer::new(&env.scene().desc, &env.cfg.viewer, 1).unwrap();
+    let mut renderer = Renderer::new(&env.scene().desc, &env.cfg.base.viewer, 1).unwrap();
     let markers = env.debug_markers(0);
     renderer.place(env.scene().backend.as_ref(), &markers);
     let mut frames = Vec::new();

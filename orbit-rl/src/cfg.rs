@@ -210,8 +210,17 @@ impl RunnerCfg {
             })
         };
         let a = &self.algorithm;
-        if self.num_steps_per_env == 0 {
-            return bad("num_steps_per_env", "must be at least 1".into());
+        if let Err(message) = stays_below(&self.experiment_name) {
+            return bad("experiment_name", message);
+        }
+        if self.run_name.contains(['/', '\\']) {
+            return bad(
+                "run_name",
+                format!(
+                    "{:?} is a suffix of the run directory's name: it may not contain `/` or `\\`",
+                    self.run_name
+                ),
+            );
         }
         if self.max_iterations == 0 {
             return bad(
@@ -219,11 +228,50 @@ impl RunnerCfg {
                 "must be at least 1 (a run of no iterations would train nothing)".into(),
             );
         }
-        if a.num_learning_epochs == 0 {
-            return bad("algorithm.num_learning_epochs", "must be at least 1".into());
+        for (field, value, max) in [
+            (
+                "num_steps_per_env",
+                self.num_steps_per_env,
+                MAX_STEPS_PER_ENV,
+            ),
+            ("max_iterations", self.max_iterations, MAX_ITERATIONS),
+            ("save_interval", self.save_interval, MAX_ITERATIONS),
+            (
+                "algorithm.num_learning_epochs",
+                a.num_learning_epochs,
+                MAX_EPOCHS,
+            ),
+            (
+                "algorithm.num_mini_batches",
+                a.num_mini_batches,
+                MAX_MINI_BATCHES,
+            ),
+        ] {
+            if !(1..=max).contains(&value) {
+                return bad(
+                    field,
+                    format!("{value} is out of range: expected 1 to {max}"),
+                );
+            }
         }
-        if a.num_mini_batches == 0 {
-            return bad("algorithm.num_mini_batches", "must be at least 1".into());
+        for (field, dims) in [
+            ("policy.actor_hidden_dims", &self.policy.actor_hidden_dims),
+            ("policy.critic_hidden_dims", &self.policy.critic_hidden_dims),
+        ] {
+            if let Some(w) = dims.iter().find(|w| !(1..=MAX_LAYER_WIDTH).contains(*w)) {
+                return bad(
+                    field,
+                    format!("layer width {w} is out of range: expected 1 to {MAX_LAYER_WIDTH}"),
+                );
+            }
+        }
+        for (field, value) in [
+            ("algorithm.value_loss_coef", a.value_loss_coef),
+            ("algorithm.entropy_coef", a.entropy_coef),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return bad(field, format!("must be a finite number >= 0, got {value}"));
+            }
         }
         let positive = |x: f32| x > 0.0 && x.is_finite();
         if !(positive(a.gamma) && a.gamma <= 1.0) {
@@ -235,10 +283,13 @@ impl RunnerCfg {
         if !(0.0..=1.0).contains(&a.lam) {
             return bad("algorithm.lam", format!("must be in [0, 1], got {}", a.lam));
         }
-        if !(a.learning_rate > 0.0 && a.learning_rate.is_finite()) {
+        if !(a.learning_rate > 0.0 && a.learning_rate <= 1.0) {
             return bad(
                 "algorithm.learning_rate",
-                format!("must be positive, got {}", a.learning_rate),
+                format!(
+                    "{} is out of range: expected above 0, at most 1",
+                    a.learning_rate
+                ),
             );
         }
         for (field, value) in [
@@ -254,13 +305,6 @@ impl RunnerCfg {
             return bad(
                 "policy.init_noise_std",
                 format!("must be positive, got {}", self.policy.init_noise_std),
-            );
-        }
-        if self.policy.actor_hidden_dims.contains(&0) || self.policy.critic_hidden_dims.contains(&0)
-        {
-            return bad(
-                "policy.actor_hidden_dims",
-                "layer widths must be at least 1".into(),
             );
         }
         Ok(())
@@ -285,6 +329,36 @@ impl RunnerCfg {
         }
         Ok(())
     }
+}
+
+/// Most iterations of a run (and the longest save interval): a billion iterations is beyond
+/// any run's time, so more is a typo.
+pub const MAX_ITERATIONS: usize = 1_000_000_000;
+/// Most env steps per env and iteration.
+pub const MAX_STEPS_PER_ENV: usize = 100_000;
+/// Most epochs over an iteration's transitions.
+pub const MAX_EPOCHS: usize = 1000;
+/// Most minibatches per epoch.
+pub const MAX_MINI_BATCHES: usize = 1_000_000;
+/// Widest hidden layer.
+pub const MAX_LAYER_WIDTH: usize = 65_536;
+
+/// Whether `name` is a relative path that stays below the directory it is joined to (no
+/// `..`, no root, not empty): an experiment's directory must lie under the log root.
+fn stays_below(name: &str) -> Result<(), String> {
+    use std::path::Component;
+    let path = std::path::Path::new(name);
+    let leaves = path
+        .components()
+        .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir));
+    if name.is_empty() || leaves || path.components().all(|c| c == Component::CurDir) {
+        return Err(format!(
+            "{name:?} must name a directory below the log root (no `..`, no absolute path, \
+             not empty): use a plain name such as \"box_pushing\", or pass --log-root to write \
+             elsewhere"
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -327,5 +401,30 @@ mod tests {
             message.starts_with("t.ron: field `max_iterations`: "),
             "{message}"
         );
+    }
+
+    /// An experiment name may not lead out of the log root; a run name is a suffix of one
+    /// directory's name.
+    #[test]
+    fn run_directories_stay_below_the_log_root() {
+        for name in ["../../x", "/tmp/x", "a/../../x", "", "."] {
+            let o = [format!("experiment_name={name:?}")];
+            let message = RunnerCfg::from_ron(CFG, "t.ron", &o)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                message.starts_with("t.ron: field `experiment_name`: "),
+                "{name}: {message}"
+            );
+        }
+        for name in ["box_pushing", "franka/box_pushing", "./x"] {
+            let o = [format!("experiment_name={name:?}")];
+            assert!(RunnerCfg::from_ron(CFG, "t.ron", &o).is_ok(), "{name}");
+        }
+        let o = ["run_name=\"../up\"".to_string()];
+        let message = RunnerCfg::from_ron(CFG, "t.ron", &o)
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("field `run_name`"), "{message}");
     }
 }

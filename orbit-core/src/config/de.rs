@@ -193,13 +193,35 @@ macro_rules! integers {
     )*};
 }
 
+/// The number a float field holds, refused where a 32-bit float would hold another: beyond
+/// ±3.4e38 it would become infinite, and a non-zero value below 1.2e-38 would lose its
+/// digits or become 0.
+fn float_of(node: &Node, single: bool) -> Option<Result<f64>> {
+    let value = match node.kind {
+        NodeKind::Float(f) => f,
+        NodeKind::Int(i) => i as f64,
+        _ => return None,
+    };
+    if single && value.abs() > f64::from(f32::MAX) {
+        return Some(Err(de::Error::custom(format!(
+            "{value:e} is out of range: a 32-bit float holds magnitudes up to 3.4e38"
+        ))));
+    }
+    if single && value != 0.0 && value.abs() < f64::from(f32::MIN_POSITIVE) {
+        return Some(Err(de::Error::custom(format!(
+            "{value:e} is out of range: a 32-bit float holds non-zero magnitudes from 1.2e-38 \
+             (write 0 for zero)"
+        ))));
+    }
+    Some(Ok(value))
+}
+
 macro_rules! floats {
-    ($($method:ident)*) => {$(
+    ($($method:ident $single:literal)*) => {$(
         fn $method<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value> {
-            match self.node.kind {
-                NodeKind::Float(f) => visitor.visit_f64(f),
-                NodeKind::Int(i) => visitor.visit_f64(i as f64),
-                _ => Err(invalid_type(self.node, &visitor)),
+            match float_of(self.node, $single) {
+                Some(value) => visitor.visit_f64(value?),
+                None => Err(invalid_type(self.node, &visitor)),
             }
         }
     )*};
@@ -245,7 +267,7 @@ impl<'de> de::Deserializer<'de> for NodeDe<'de, '_> {
         deserialize_u8 deserialize_u16 deserialize_u32 deserialize_u64 deserialize_u128
     }
 
-    floats! { deserialize_f32 deserialize_f64 }
+    floats! { deserialize_f32 true deserialize_f64 false }
 
     fn deserialize_char<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value> {
         match &self.node.kind {

@@ -872,6 +872,18 @@ fn malformed_inputs_are_located_errors() {
             "(name: \"a\", sim: (dt: 1e999, backend: Rapier))".into(),
             "out of range for a 64-bit float",
         ),
+        (
+            "(name: \"a\", sim: (dt: 1e39, backend: Rapier))".into(),
+            "sim.dt: 1e39 is out of range: a 32-bit float holds magnitudes up to 3.4e38",
+        ),
+        (
+            "(name: \"a\", sim: (dt: 1e-50, backend: Rapier))".into(),
+            "sim.dt: 1e-50 is out of range: a 32-bit float holds non-zero magnitudes from 1.2e-38",
+        ),
+        (
+            format!("(name: \"a\", {SIM}, offset: (1, -4e38, 3))"),
+            "-4e38 is out of range: a 32-bit float",
+        ),
         ("(name: \"a\" /* open".into(), "unterminated block comment"),
         (
             format!("(name: \"a\\q\", {SIM})"),

@@ -59,6 +59,7 @@ pub(crate) fn context<'a>(
 ) -> TermContext<'a> {
     let params = node_at(doc, &format!("{field}.params"));
     TermContext {
+        at: node_at(doc, &field).map(|n| n.span.clone()),
         field,
         params,
         scene,

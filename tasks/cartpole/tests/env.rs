@@ -36,3 +36,79 @@ fn a_cart_off_the_rail_is_terminated_with_the_penalty() {
     assert!(terminated && !time_out);
     assert!((reward + 2.0 / 60.0).abs() < 1e-5, "reward {reward}");
 }
+
+/// A term's error names the file and line of the term's config (here the bundled file).
+#[test]
+fn a_term_error_names_the_file_and_line_of_the_term() {
+    let o = [
+        "sim.backend=\"rapier\"".to_string(),
+        "actions.joint_effort.params.effort_clip=[1.0, 2.0]".to_string(),
+    ];
+    let message = make(TASK_ID, &o).err().expect("refused").to_string();
+    assert!(
+        message.starts_with("<bundled>/cartpole/env/cartpole.ron:17:")
+            && message.contains("actions.joint_effort: effort_clip has 2 values for 1 joints"),
+        "{message}"
+    );
+}
+
+/// Numbers outside their ranges are refused when the env is built, each error naming the
+/// field, the value and the range (they would hang a run or simulate something else).
+#[test]
+fn out_of_range_numbers_are_refused_with_field_value_and_range() {
+    let cases = [
+        (
+            "decimation=0",
+            "decimation: 0 is out of range: expected 1 to 1000",
+        ),
+        ("decimation=100000", "decimation: 100000 is out of range"),
+        (
+            "sim.dt=1e-9",
+            "sim.dt: 0.000000001 is out of range: expected 0.000001 to 1 seconds",
+        ),
+        ("sim.dt=5.0", "sim.dt: 5 is out of range"),
+        (
+            "sim.solver_iterations=1000000",
+            "sim.solver_iterations: 1000000 is out of range",
+        ),
+        (
+            "episode_length_s=0.001",
+            "episode_length_s: 0.001 is out of range: expected 0.016",
+        ),
+        (
+            "episode_length_s=1e9",
+            "episode_length_s: 1000000000 is out of range",
+        ),
+        (
+            "num_envs=100000000",
+            "num_envs: 100000000 is out of range: expected 1 to 16777216",
+        ),
+        (
+            "sim.gravity=(0.0, 0.0, -1e5)",
+            "sim.gravity: -100000 is out of range",
+        ),
+        (
+            "observations.policy.terms.joint_pos_rel.history_length=100000",
+            "history_length: 100000 is out of range",
+        ),
+        (
+            "scene.articulations.robot.init_state.pos=(1e6, 0.0, 0.0)",
+            "init_state.pos: 1000000 is out of range: expected -10000 to 10000 metres",
+        ),
+    ];
+    for (o, expected) in cases {
+        let overrides = [
+            "num_envs=1".to_string(),
+            "sim.backend=\"rapier\"".to_string(),
+            o.into(),
+        ];
+        let message = match make(TASK_ID, &overrides) {
+            Ok(_) => panic!("`{o}` was accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            message.contains(expected),
+            "`{o}`: `{expected}` not in: {message}"
+        );
+    }
+}
