@@ -38,6 +38,16 @@ pub trait VecEnv {
     fn num_obs(&self) -> usize;
     /// Width of one env's critic observation.
     fn num_critic_obs(&self) -> usize;
+    /// Each action value's raw range beyond which it acts the same (a clip, an effort limit);
+    /// unbounded where nothing saturates it.
+    fn action_bounds(&self) -> Vec<(f32, f32)> {
+        vec![(f32::NEG_INFINITY, f32::INFINITY); self.num_actions()]
+    }
+    /// What writes value `index` of an actor (or, with `critic`, a critic) observation row:
+    /// its term's name, if the env knows it.
+    fn observation_source(&self, _critic: bool, _index: usize) -> Option<String> {
+        None
+    }
     /// Steps after which an episode times out.
     fn max_episode_length(&self) -> u32;
     /// Actor observations, `[num_envs, num_obs]`.
@@ -64,6 +74,13 @@ pub trait VecEnv {
     fn step(&mut self, actions: &[f32]) -> Result<VecEnvStep<'_>, VecEnvError>;
     /// Resets every env and computes the first observations of their new episodes.
     fn reset(&mut self) -> Result<(), VecEnvError>;
+    /// Resets the listed envs alone (their new episodes' first observations; the others keep
+    /// theirs).
+    fn reset_envs(&mut self, _env_ids: &[usize]) -> Result<(), VecEnvError> {
+        Err(VecEnvError::Mismatch(
+            "this env resets all its envs together: reset them all".into(),
+        ))
+    }
     /// Steps each env has taken in its running episode.
     fn episode_lengths(&self) -> Result<&[u32], VecEnvError> {
         Err(VecEnvError::Mismatch(
@@ -103,6 +120,14 @@ impl<E: VecEnv + ?Sized> VecEnv for Box<E> {
         (**self).num_critic_obs()
     }
 
+    fn action_bounds(&self) -> Vec<(f32, f32)> {
+        (**self).action_bounds()
+    }
+
+    fn observation_source(&self, critic: bool, index: usize) -> Option<String> {
+        (**self).observation_source(critic, index)
+    }
+
     fn max_episode_length(&self) -> u32 {
         (**self).max_episode_length()
     }
@@ -133,6 +158,10 @@ impl<E: VecEnv + ?Sized> VecEnv for Box<E> {
 
     fn reset(&mut self) -> Result<(), VecEnvError> {
         (**self).reset()
+    }
+
+    fn reset_envs(&mut self, env_ids: &[usize]) -> Result<(), VecEnvError> {
+        (**self).reset_envs(env_ids)
     }
 
     fn episode_lengths(&self) -> Result<&[u32], VecEnvError> {
@@ -207,6 +236,19 @@ impl VecEnv for RlVecEnv {
         self.num_critic_obs
     }
 
+    fn action_bounds(&self) -> Vec<(f32, f32)> {
+        self.env.actions().bounds()
+    }
+
+    fn observation_source(&self, critic: bool, index: usize) -> Option<String> {
+        let group = match critic && self.env.observation("critic").is_some() {
+            true => "critic",
+            false => "policy",
+        };
+        let term = self.env.observation_term_at(group, index)?;
+        Some(format!("observation term `{group}/{term}`"))
+    }
+
     fn max_episode_length(&self) -> u32 {
         self.env.max_episode_length()
     }
@@ -262,6 +304,15 @@ impl VecEnv for RlVecEnv {
     fn reset(&mut self) -> Result<(), VecEnvError> {
         self.dones.fill(false);
         Ok(self.env.reset()?)
+    }
+
+    fn reset_envs(&mut self, env_ids: &[usize]) -> Result<(), VecEnvError> {
+        for &e in env_ids {
+            if let Some(done) = self.dones.get_mut(e) {
+                *done = false;
+            }
+        }
+        Ok(self.env.reset_envs(env_ids)?)
     }
 
     fn episode_lengths(&self) -> Result<&[u32], VecEnvError> {

@@ -27,6 +27,9 @@ pub enum RlError {
     /// The env does not fit the learner (missing observation group, sizes that disagree).
     #[error("environment: {0}")]
     EnvMismatch(String),
+    /// The training (agent) config cannot be loaded or is missing.
+    #[error("agent config: {0}")]
+    AgentConfig(String),
     /// Reading or writing a run directory failed.
     #[error("{path}: {source}")]
     Io {
@@ -85,8 +88,9 @@ pub enum RlError {
         /// The checkpoint written or already there (none before the first iteration ends).
         checkpoint: Option<PathBuf>,
     },
-    /// Training produced a non-finite number (the loss or the policy's output).
-    #[error("training diverged: {0} is not finite; lower the learning rate or check the rewards")]
+    /// A non-finite number: from the env (an observation, a reward), or from the learner (the
+    /// loss, the policy's output); the message says which and what to change.
+    #[error("{0}")]
     NonFinite(String),
 }
 

@@ -27,6 +27,14 @@ pub struct EmpiricalNormalizer {
 }
 
 impl EmpiricalNormalizer {
+    /// The first non-finite statistic, as `mean[k]` or `var[k]`.
+    pub fn first_non_finite(&self) -> Option<String> {
+        let at = |name: &str, v: &[f32]| {
+            (v.iter().position(|x| !x.is_finite())).map(|k| format!("{name}[{k}] ({})", v[k]))
+        };
+        at("mean", &self.mean).or_else(|| at("var", &self.var))
+    }
+
     /// Statistics of a `dim`-dimensional input: mean 0, variance 1, frozen after `until` rows.
     pub fn new(dim: usize, until: u64) -> Self {
         Self {

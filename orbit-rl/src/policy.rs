@@ -51,13 +51,39 @@ impl Policy {
             &device,
         );
         let model = crate::ppo::load_model(model, base)?;
-        Ok(Self::new(
+        let policy = Self::new(
             model,
             state.obs_normalizer,
             device,
             state.num_obs,
             state.num_actions,
-        ))
+        );
+        policy.check_finite(base)?;
+        Ok(policy)
+    }
+
+    /// Fails, naming the checkpoint `base` and the part, when the policy holds non-finite
+    /// numbers: its normaliser's statistics, or weights that give a non-finite action for an
+    /// observation of zeros (a checkpoint saved from a diverged run, or damaged).
+    pub(crate) fn check_finite(&self, base: &Path) -> Result<(), RlError> {
+        if let Some(part) = self.normalizer.as_ref().and_then(|n| n.first_non_finite()) {
+            return Err(RlError::NonFinite(format!(
+                "{}: the observation normaliser's {part} is not finite: the checkpoint was \
+                 saved from a diverged run or is damaged; load an earlier checkpoint",
+                base.with_extension("json").display()
+            )));
+        }
+        let probe = self.act(&vec![0.0; self.num_obs]);
+        if let Some(i) = orbit_core::parallel::first_non_finite(&probe) {
+            return Err(RlError::NonFinite(format!(
+                "{}: the actor's weights are not finite (its action {i} for zero observations is \
+                 {}): the checkpoint was saved from a diverged run or is damaged; load an \
+                 earlier checkpoint",
+                base.with_extension("bpk").display(),
+                probe[i]
+            )));
+        }
+        Ok(())
     }
 
     /// Observation width the policy expects.

@@ -71,11 +71,24 @@ pub fn resolve_checkpoint(
     load_run: &str,
     checkpoint: &str,
 ) -> Result<PathBuf, RlError> {
-    let pattern = |p: &str, end: &str| {
-        Regex::new(&format!("^(?:{p}){end}"))
-            .map_err(|e| RlError::checkpoint(experiment_dir, format!("invalid pattern `{p}`: {e}")))
+    let pattern = |flag: &str, p: &str, end: &str| {
+        Regex::new(&format!("^(?:{p}){end}")).map_err(|e| {
+            RlError::checkpoint(
+                experiment_dir,
+                format!("{flag} `{p}` is not a valid regular expression: {e}"),
+            )
+        })
     };
-    let (run_re, ckpt_re) = (pattern(load_run, "")?, pattern(checkpoint, "$")?);
+    let run_re = pattern("--load-run", load_run, "")?;
+    let ckpt_re = pattern("--checkpoint", checkpoint, "$")?;
+    if !experiment_dir.is_dir() {
+        return Err(RlError::checkpoint(
+            experiment_dir,
+            "no runs here yet (the directory does not exist): train the task first, or pass \
+             --log-root with the directory that holds its runs, or --checkpoint with a \
+             checkpoint's path",
+        ));
+    }
     let list = |dir: &Path| -> Result<Vec<String>, RlError> {
         let mut names: Vec<String> = std::fs::read_dir(dir)
             .map_err(RlError::io(dir))?
@@ -187,6 +200,15 @@ mod tests {
         );
         let got = find_checkpoint(&root, ".*", Some("model_7")).unwrap();
         assert_eq!(got, new.join("model_7"));
+        for (load_run, checkpoint, flag) in [
+            ("(", "model_.*", "--load-run `(`"),
+            (".*", "[", "--checkpoint `[`"),
+        ] {
+            let err = resolve_checkpoint(&root, load_run, checkpoint).unwrap_err();
+            assert!(err.to_string().contains(flag), "{err}");
+        }
+        let err = find_checkpoint(&root.join("nothing"), ".*", None).unwrap_err();
+        assert!(err.to_string().contains("no runs here yet"), "{err}");
         let missing = old.join("model_6");
         let err = find_checkpoint(&root, ".*", Some(missing.to_str().unwrap())).unwrap_err();
         assert!(

@@ -206,9 +206,12 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         let critic_is_actor = !actor.is_empty()
             && std::ptr::eq(actor, critic)
             && self.obs_normalizer.is_some() == self.critic_normalizer.is_some();
-        check_finite("policy observation", actor, self.env.num_obs())?;
+        let env = &self.env;
+        let source = |critic: bool| move |i: usize| env.observation_source(critic, i);
+        check_finite("policy observation", actor, env.num_obs(), source(false))?;
         if !critic_is_actor {
-            check_finite("critic observation", critic, self.env.num_critic_obs())?;
+            let dim = env.num_critic_obs();
+            check_finite("critic observation", critic, dim, source(true))?;
         }
         self.critic_is_actor = critic_is_actor;
         let critic = (!critic_is_actor).then_some((
@@ -315,7 +318,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
                     success.0 += f64::from(*v);
                     success.1 += 1;
                 }
-                check_finite("reward", step.rewards, 1)?;
+                check_finite("reward", step.rewards, 1, |_| None)?;
                 for e in 0..n {
                     self.current_return[e] += step.rewards[e];
                     self.current_length[e] += 1;
@@ -528,6 +531,13 @@ impl<E: VecEnv> OnPolicyRunner<E> {
         self.alg.set_learning_rate(state.learning_rate);
         self.obs_normalizer = state.obs_normalizer;
         self.critic_normalizer = state.critic_obs_normalizer;
+        if let Some(part) = (self.critic_normalizer.as_ref()).and_then(|n| n.first_non_finite()) {
+            return Err(RlError::NonFinite(format!(
+                "{}: the critic's observation normaliser's {part} is not finite",
+                base.with_extension("json").display()
+            )));
+        }
+        self.inference_policy().check_finite(base)?;
         if self.alg.cfg.normalize_value {
             // A checkpoint trained without value normalisation starts fresh statistics.
             self.alg.value_normalizer = Some(
@@ -548,9 +558,15 @@ fn critic_view<'a>(critic_is_actor: bool, obs: &'a [f32], critic_obs: &'a [f32])
     if critic_is_actor { obs } else { critic_obs }
 }
 
-/// An error naming the env (and, for rows wider than 1, the entry) of the first non-finite
-/// value in `values` (`[num_envs × dim]`).
-fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
+/// An error naming the env (and, for rows wider than 1, the entry and what `source` says
+/// wrote it) of the first non-finite value in `values` (`[num_envs × dim]`): the env made it,
+/// not the learner.
+fn check_finite(
+    what: &str,
+    values: &[f32],
+    dim: usize,
+    source: impl Fn(usize) -> Option<String>,
+) -> Result<(), RlError> {
     let Some(i) = orbit_core::parallel::first_non_finite(values) else {
         return Ok(());
     };
@@ -559,8 +575,10 @@ fn check_finite(what: &str, values: &[f32], dim: usize) -> Result<(), RlError> {
     } else {
         String::new()
     };
+    let from = source(i % dim).map_or(String::new(), |s| format!(", from the {s}"));
     Err(RlError::NonFinite(format!(
-        "env {}'s {what}{entry} ({})",
+        "env {}'s {what}{entry} is {}{from}: the env produced it before the learner saw it; \
+         check that term's inputs, scale and clip, and the physics",
         i / dim,
         values[i]
     )))

@@ -196,6 +196,43 @@ fn a_nan_observation_is_an_error_naming_env_and_entry() {
     }
 }
 
+/// A checkpoint whose observation statistics are not finite (1e39 overflows an f32) is refused
+/// when loaded, naming the file and the statistic, by `play`'s policy and by a resuming
+/// runner alike, instead of surfacing later as a diverged update.
+#[test]
+fn a_checkpoint_with_non_finite_statistics_is_refused_naming_them() {
+    let dir = run_dir("non-finite-checkpoint");
+    let cfg =
+        RunnerCfg::from_ron(CFG, "bandit.ron", &["empirical_normalization=true".into()]).unwrap();
+    let mut runner = OnPolicyRunner::new(
+        Bandit::new(8),
+        cfg.clone(),
+        Some(dir.clone()),
+        Device::flex(),
+    )
+    .unwrap();
+    runner.learn(1).unwrap();
+    let base = dir.join("model_0");
+    let json = base.with_extension("json");
+    let mut state: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    state["obs_normalizer"]["mean"][1] = serde_json::json!(1e39);
+    std::fs::write(&json, serde_json::to_string(&state).unwrap()).unwrap();
+    let e = orbit_rl::Policy::load(&base, Device::flex())
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("model_0.json") && e.contains("mean[1] (inf) is not finite"),
+        "{e}"
+    );
+    let mut resumed = OnPolicyRunner::new(Bandit::new(8), cfg, None, Device::flex()).unwrap();
+    let e = resumed.load_checkpoint(&base).unwrap_err().to_string();
+    assert!(e.contains("mean[1] (inf) is not finite"), "{e}");
+    assert!(!e.contains("learning rate"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A fresh, empty directory for a test's run files.
 fn run_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("orbit-bandit-{name}-{}", std::process::id()));

@@ -48,6 +48,22 @@ pub struct ObservationGroup {
     pub values: Vec<f32>,
 }
 
+impl ObservationGroup {
+    /// The term that writes value `index` of an env's row, and the value's index within it
+    /// (`<term>[k]`).
+    pub fn term_at(&self, index: usize) -> Option<String> {
+        let mut start = 0;
+        for t in &self.terms {
+            let end = start + t.out_dim();
+            if index < end {
+                return Some(format!("{}[{}]", t.name, index - start));
+            }
+            start = end;
+        }
+        None
+    }
+}
+
 /// Computes observation groups: per term `func`, then noise, clip, scale; concatenated.
 pub struct ObservationManager {
     pub(crate) groups: Vec<ObservationGroup>,

@@ -174,7 +174,12 @@ impl Ppo {
             normalizer.denormalize(value);
         }
         if first_non_finite(mu).is_some() || first_non_finite(value).is_some() {
-            return Err(RlError::NonFinite("the policy's output".into()));
+            return Err(RlError::NonFinite(
+                "training diverged: the policy's output is not finite for finite observations \
+                 (the weights or the observation normaliser have become non-finite); lower the \
+                 learning rate or check the rewards"
+                    .into(),
+            ));
         }
         let sigma = &self.sigma;
         // Each env draws from its own stream, so the envs run in parallel with the same result.

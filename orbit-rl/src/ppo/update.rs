@@ -100,8 +100,9 @@ impl Ppo {
         };
         if !(value.is_finite() && surrogate.is_finite()) {
             let e = RlError::NonFinite(format!(
-                "the PPO loss (mean value loss {}, surrogate {} over the update; learning rate \
-                 {:.2e} at its end; rollout {})",
+                "training diverged: the PPO loss is not finite (mean value loss {}, surrogate {} \
+                 over the update; learning rate {:.2e} at its end; rollout {}); lower the \
+                 learning rate or check the rewards",
                 value / steps,
                 surrogate / steps,
                 learning_rate,
