@@ -13,7 +13,7 @@ fi
 py="$venv/bin/python"
 packages=(maturin "gymnasium>=1.0" "numpy>=1.24" pytest)
 if [ "${ORBIT_REQUIRE_CLIENTS:-0}" = 1 ]; then
-    packages+=("torch>=2.6" "rsl-rl-lib>=3" "tensordict>=0.7" "stable-baselines3>=2.4" "skrl>=1.4")
+    packages+=("torch>=2.6" "rsl-rl-lib>=5" "tensordict>=0.7" "stable-baselines3>=2.4" "skrl>=2")
 fi
 "$py" -m pip install --quiet --disable-pip-version-check "${packages[@]}"
 # Debug profile, as `cargo test` builds: the workspace's own build cache serves both.

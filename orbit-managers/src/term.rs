@@ -112,7 +112,8 @@ pub trait ActionTerm: Send + Sync {
     /// Processed actions, `num_envs × dim` (e.g. the commanded torques).
     fn processed(&self) -> &[f32];
     /// The raw action range of each action value beyond which the term's effect no longer
-    /// changes (its clip, or an effort limit divided by the scale); unbounded by default.
+    /// changes in any state (its clip, or an effort limit divided by the scale); unbounded by
+    /// default.
     fn bounds(&self) -> Vec<(f32, f32)> {
         vec![(f32::NEG_INFINITY, f32::INFINITY); self.dim()]
     }

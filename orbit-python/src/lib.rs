@@ -51,6 +51,8 @@ struct NativeEnv {
     black_box_overrides: Vec<String>,
     /// Wall time spent inside the env's steps, to tell Python's share of a step from Rust's.
     stepping: Duration,
+    /// Which backend `sim.backend = "auto"` chose and why (none when the config named one).
+    backend_choice: Option<String>,
 }
 
 impl NativeEnv {
@@ -72,6 +74,7 @@ impl NativeEnv {
             overrides,
             black_box_overrides,
             stepping: Duration::ZERO,
+            backend_choice: None,
         })
     }
 }
@@ -160,6 +163,23 @@ impl NativeEnv {
         self.stepping.as_secs_f64()
     }
 
+    /// Which backend `sim.backend = "auto"` chose and why, for the package to log (`None`
+    /// when the config or `backend=` named the backend).
+    #[getter]
+    fn backend_choice(&self) -> Option<&str> {
+        self.backend_choice.as_deref()
+    }
+
+    /// Each action value's raw range beyond which it acts the same: `(low, high)`, new
+    /// `float32` arrays `[num_actions]` (infinite where nothing saturates it).
+    fn action_bounds<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> (Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>) {
+        let (low, high): (Vec<f32>, Vec<f32>) = self.env.action_bounds().into_iter().unzip();
+        (PyArray1::from_vec(py, low), PyArray1::from_vec(py, high))
+    }
+
     /// Whether one step is one movement primitive (a black-box task).
     #[getter]
     fn black_box(&self) -> bool {
@@ -199,6 +219,11 @@ impl NativeEnv {
         self.env
             .set_episode_lengths(lengths.as_slice()?)
             .map_err(error)
+    }
+
+    /// Resets the listed envs alone (gymnasium's `reset_mask`); the others keep their state.
+    fn reset_envs(&mut self, env_ids: Vec<usize>) -> PyResult<()> {
+        self.env.reset_envs(&env_ids).map_err(error)
     }
 
     /// Resets every env.
@@ -299,8 +324,11 @@ fn make(
         .map_err(error)?;
     let user: Vec<String> = overrides.iter().map(|o| orbit::env_override(o)).collect();
     let mut overrides = orbit::run_overrides(num_envs, seed, backend, &user);
-    let choice = orbit::choose_run_backend(&configs.env, &mut overrides).map_err(error)?;
-    NativeEnv::build(configs, overrides, black_box_overrides, choice.name)
+    let choice = orbit::pick_run_backend(&configs.env, &mut overrides).map_err(error)?;
+    let line = orbit::backend_choice_line(&choice);
+    let mut env = NativeEnv::build(configs, overrides, black_box_overrides, choice.name)?;
+    env.backend_choice = line;
+    Ok(env)
 }
 
 /// The `orbit_rs._native` module.
@@ -310,5 +338,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tasks, m)?)?;
     m.add_class::<NativeEnv>()?;
     m.add("OrbitError", m.py().get_type::<OrbitError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -145,6 +145,23 @@ def test_sb3_infos_carry_terminal_observations():
     assert all(info["TimeLimit.truncated"] for info in infos if "terminal_observation" in info)
 
 
+def test_sb3_time_outs_are_marked_without_final_observations():
+    need("stable_baselines3")
+    from orbit_rs.wrappers.sb3 import Sb3VecEnvWrapper
+
+    env = Sb3VecEnvWrapper(cartpole(final_obs=False, overrides=["episode_length_s=0.1"]))
+    env.reset()
+    timed_out = 0
+    for t in range(20):
+        env.step_async(np.zeros((16, 1), np.float32))
+        _, _, dones, infos = env.step_wait()
+        timed_out += sum(info.get("TimeLimit.truncated", False) for info in infos)
+        assert all("terminal_observation" not in info for info in infos)
+    assert timed_out >= 16, "every held pole times out after 0.1 s"
+    # Unbounded values get SB3's [-100, 100].
+    np.testing.assert_array_equal(env.action_space.high, [100.0])
+
+
 def test_skrl_wrapper_gives_column_tensors():
     need("skrl")
     from orbit_rs.wrappers.skrl import SkrlVecEnvWrapper

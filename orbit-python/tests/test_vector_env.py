@@ -160,3 +160,76 @@ def test_a_black_box_step_is_one_movement_primitive():
     assert terminated.all() and not truncated.any(), "the primitive runs the whole episode"
     assert all(f.shape == obs.shape[1:] for f in info["final_obs"])
     assert np.isfinite(rewards).all() and "log" in info
+
+
+def test_a_closed_env_says_so():
+    envs = cartpole(num_envs=2)
+    envs.reset()
+    envs.close()
+    for call in (lambda: envs.step(np.zeros((2, 1), np.float32)), envs.reset):
+        with pytest.raises(orbit_rs.OrbitError, match="Isaac-Cartpole-v0` was closed"):
+            call()
+
+
+def test_reset_mask_resets_the_masked_envs_alone(env):
+    env.reset()
+    for t in range(3):
+        env.step(actions_for(t, 16, 1))
+    before = env.native.observations()
+    mask = np.zeros(16, bool)
+    mask[[2, 5]] = True
+    obs, info = env.reset(options={"reset_mask": mask})
+    lengths = env.native.episode_lengths()
+    assert info == {}
+    assert (lengths[mask] == 0).all() and (lengths[~mask] == 3).all()
+    np.testing.assert_array_equal(obs[~mask], before[~mask])
+    assert not np.array_equal(obs[mask], before[mask])
+    with pytest.raises(ValueError, match=r"\['seeds'\] are not understood"):
+        env.reset(options={"seeds": 1})
+    with pytest.raises(ValueError, match="boolean array of shape"):
+        env.reset(options={"reset_mask": [1, 0]})
+
+
+def test_without_final_obs_no_final_obs_keys():
+    envs = cartpole(final_obs=False, overrides=["episode_length_s=0.1"])
+    envs.reset()
+    for t in range(20):
+        _, _, terminated, truncated, info = envs.step(actions_for(t, 16, 1))
+        if (terminated | truncated).any():
+            break
+    assert (terminated | truncated).any()
+    assert "_final_obs" not in info and "final_obs" not in info
+    np.testing.assert_array_equal(info["_final_info"], terminated | truncated)
+
+
+def test_the_action_space_holds_the_saturation_bounds(env):
+    # The cart's drive is damped, so 400 N of action need not saturate it: unbounded.
+    assert not env.single_action_space.is_bounded("both")
+    # Undamped, its effort of 100 N per unit saturates at the 400 N limit: beyond ±4 every
+    # action acts as ±4 does.
+    undamped = cartpole(
+        overrides=[
+            "scene.articulations.robot.actuators.cart_actuator=(joint_names_expr: "
+            '["slider_to_cart"], stiffness: 0.0, damping: 0.0, effort_limit: Some(400.0))'
+        ]
+    )
+    np.testing.assert_array_equal(undamped.single_action_space.low, [-4.0])
+    np.testing.assert_array_equal(undamped.single_action_space.high, [4.0])
+    observed = []
+    for action in (4.0, 1e30, 3.5):
+        undamped.reset(seed=7)
+        observed.append(undamped.step(np.full((16, 1), action, np.float32))[0])
+    np.testing.assert_array_equal(observed[0], observed[1])
+    assert not np.array_equal(observed[0], observed[2])
+    # A clip bounds the space where the term sets it.
+    clipped = cartpole(overrides=["actions.joint_effort.params.clip=(-1.0, 1.0)"])
+    np.testing.assert_array_equal(clipped.single_action_space.high, [1.0])
+
+
+def test_version_and_backend_choice_go_to_their_places(capsys, caplog):
+    assert orbit_rs.__version__.count(".") == 2
+    with caplog.at_level("INFO", logger="orbit_rs"):
+        envs = orbit_rs.make(CARTPOLE, num_envs=2, backend="auto", seed=1)
+    assert capsys.readouterr().out == ""
+    assert any("chose it" in r.getMessage() for r in caplog.records), caplog.records
+    envs.close()

@@ -98,6 +98,12 @@ impl ActionManager {
         self.terms.iter().map(|(n, t)| (n.as_str(), t.joint_map()))
     }
 
+    /// Each action value's raw range beyond which it acts the same (see
+    /// [`ActionTerm::bounds`]), in action order.
+    pub fn bounds(&self) -> Vec<(f32, f32)> {
+        self.terms.iter().flat_map(|(_, t)| t.bounds()).collect()
+    }
+
     /// The processed actions of a term by name.
     pub fn processed(&self, name: &str) -> Option<&[f32]> {
         self.terms

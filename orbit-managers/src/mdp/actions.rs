@@ -64,6 +64,8 @@ struct JointAction {
     /// Scale per action value.
     scales: Vec<f32>,
     offsets: Vec<f32>,
+    /// Raw range of each action value within which it changes the target or effort.
+    bounds: Vec<(f32, f32)>,
     processed: Vec<f32>,
     /// Full `num_envs × num_dofs` target/effort buffer.
     full: Vec<f32>,
@@ -144,6 +146,10 @@ impl ActionTerm for JointAction {
         &self.processed
     }
 
+    fn bounds(&self) -> Vec<(f32, f32)> {
+        self.bounds.clone()
+    }
+
     fn joint_map(&self) -> Option<JointActionMap<'_>> {
         Some(JointActionMap {
             kind: self.kind,
@@ -179,7 +185,7 @@ fn joint_action(
     }
     let scales = action_scales(ctx, &sel, &p.scale)?;
     let defaults = &ctx.scene.desc.articulations[sel.articulation].default_joint_pos;
-    let offsets = sel
+    let offsets: Vec<f32> = sel
         .dofs
         .iter()
         .map(|&j| {
@@ -208,8 +214,30 @@ fn joint_action(
                     .zip(lim)
                     .all(|(&j, &l)| l >= drives[j].effort_limit)
             }));
+    let bounds = (0..d)
+        .map(|k| {
+            let clip = p.clip.unwrap_or((f32::NEG_INFINITY, f32::INFINITY));
+            // An effort saturates at the term's clip, and at the drive's limit where nothing
+            // else adds to it: the state's bias forces, or the drive's own PD efforts.
+            let drive = &drives[sel.dofs[k]];
+            let limit = match (kind, p.compensate_bias) {
+                (JointActionKind::Effort, false) => {
+                    let clip_k = p.effort_clip.as_ref().map_or(f32::INFINITY, |l| l[k]);
+                    let passive = drive.stiffness == 0.0 && drive.damping == 0.0;
+                    clip_k.min(if passive {
+                        drive.effort_limit
+                    } else {
+                        f32::INFINITY
+                    })
+                }
+                _ => f32::INFINITY,
+            };
+            raw_bounds(clip, limit, scales[k], offsets[k])
+        })
+        .collect();
     Ok(Box::new(JointAction {
         kind,
+        bounds,
         backend_compensation,
         compensation_enabled: false,
         full,
@@ -219,6 +247,41 @@ fn joint_action(
         scales,
         offsets,
     }))
+}
+
+/// The raw range within which `clip(raw) · scale + offset`, clamped to `±limit`, changes:
+/// the clip range, narrowed to where the effort stays within its limit.
+fn raw_bounds(clip: (f32, f32), limit: f32, scale: f32, offset: f32) -> (f32, f32) {
+    if !limit.is_finite() || scale == 0.0 {
+        return clip;
+    }
+    let (a, b) = ((-limit - offset) / scale, (limit - offset) / scale);
+    let (lo, hi) = (a.min(b), a.max(b));
+    let (lo, hi) = (clip.0.max(lo), clip.1.min(hi));
+    // A clip outside the unsaturated range (every action saturates): the clip's own range.
+    if lo <= hi { (lo, hi) } else { clip }
+}
+
+#[cfg(test)]
+mod bounds_tests {
+    use super::raw_bounds;
+
+    const FREE: (f32, f32) = (f32::NEG_INFINITY, f32::INFINITY);
+
+    /// An effort of `raw · 100` limited to ±400 N changes only for raw in ±4; an offset shifts
+    /// the range, a negative scale flips it, a clip narrows it, no limit leaves the clip.
+    #[test]
+    fn raw_bounds_are_where_the_effort_is_below_its_limit() {
+        assert_eq!(raw_bounds(FREE, 400.0, 100.0, 0.0), (-4.0, 4.0));
+        assert_eq!(raw_bounds(FREE, 400.0, 100.0, 100.0), (-5.0, 3.0));
+        assert_eq!(raw_bounds(FREE, 400.0, -100.0, 0.0), (-4.0, 4.0));
+        assert_eq!(raw_bounds((-1.0, 1.0), 400.0, 100.0, 0.0), (-1.0, 1.0));
+        assert_eq!(
+            raw_bounds((-1.0, 1.0), f32::INFINITY, 100.0, 0.0),
+            (-1.0, 1.0)
+        );
+        assert_eq!(raw_bounds(FREE, f32::INFINITY, 2.0, 0.0), FREE);
+    }
 }
 
 /// The scale of each selected joint.

@@ -9,14 +9,17 @@ Stable-Baselines3 and skrl.
 
 from __future__ import annotations
 
+import logging
 import os
 from typing import Sequence
 
 from . import _native
-from ._native import OrbitError
+from ._native import OrbitError, __version__
 from .vector_env import OrbitVectorEnv
 
-__all__ = ["OrbitError", "OrbitVectorEnv", "make", "tasks"]
+__all__ = ["OrbitError", "OrbitVectorEnv", "__version__", "make", "tasks"]
+
+_logger = logging.getLogger(__name__)
 
 
 def make(
@@ -47,6 +50,9 @@ def make(
     Raises:
         OrbitError: The config is invalid or the backend failed; the message says what to
             change.
+
+    Which backend ``"auto"`` chose, and why, is logged at level INFO on the ``orbit_rs``
+    logger.
     """
     native = _native.make(
         task,
@@ -57,6 +63,8 @@ def make(
         config=None if config is None else os.fspath(config),
         black_box_overrides=[str(o) for o in black_box_overrides],
     )
+    if native.backend_choice:
+        _logger.info(native.backend_choice)
     return OrbitVectorEnv(native, keep_final_obs=final_obs)
 
 

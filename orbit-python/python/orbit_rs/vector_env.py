@@ -24,6 +24,10 @@ class OrbitVectorEnv(VectorEnv):
     A black-box task's step is one movement primitive; its action is the primitive's
     parameters.
 
+    The action space is bounded where the task's action terms saturate (a clip, or an effort
+    limit over the action's scale): actions beyond the bounds act as the bounds do. It is
+    unbounded elsewhere. ``reset(options={"reset_mask": mask})`` resets the masked envs alone.
+
     Observations are the ``policy`` group; the ``critic`` group, if the task has one, is
     ``critic_observations()``. Arrays are ``float32`` numpy arrays, new on every call; pass
     them to torch with ``torch.from_numpy`` (or ``torch.from_dlpack``) without a copy.
@@ -37,10 +41,8 @@ class OrbitVectorEnv(VectorEnv):
         self.single_observation_space = gym.spaces.Box(
             -np.inf, np.inf, (native.num_obs,), np.float32
         )
-        # Unbounded, as Isaac Lab's: the task's action terms scale and clip.
-        self.single_action_space = gym.spaces.Box(
-            -np.inf, np.inf, (native.num_actions,), np.float32
-        )
+        low, high = native.action_bounds()
+        self.single_action_space = gym.spaces.Box(low, high, (native.num_actions,), np.float32)
         self.observation_space = gym.vector.utils.batch_space(
             self.single_observation_space, self.num_envs
         )
@@ -48,6 +50,7 @@ class OrbitVectorEnv(VectorEnv):
             self.single_action_space, self.num_envs
         )
         self.max_episode_length = native.max_episode_length
+        self._name = native.name
         self.keep_final_obs = keep_final_obs
         native.keep_final_observations(keep_final_obs)
         # Built envs start reset: the first reset() takes them as they are.
@@ -56,15 +59,22 @@ class OrbitVectorEnv(VectorEnv):
         self.render_mode = None
         self.closed = False
 
+    def _open(self) -> _native.NativeEnv:
+        if self.native is None:
+            raise _native.OrbitError(
+                f"the env of `{self._name}` was closed: make a new one with orbit_rs.make()"
+            )
+        return self.native
+
     @property
     def task(self) -> str:
         """The task id (or the env file's name)."""
-        return self.native.name
+        return self._name
 
     @property
     def backend(self) -> str:
         """The physics backend the envs run on."""
-        return self.native.backend
+        return self._open().backend
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -72,7 +82,28 @@ class OrbitVectorEnv(VectorEnv):
         """Resets every env. With ``seed``, the envs are built again from that seed, as
         orbit-rs (like Isaac Lab) seeds its random streams when it builds the envs. Built
         envs start reset, so a first ``reset()`` after ``make`` gives the same episodes as
-        the Rust env of the same seed."""
+        the Rust env of the same seed. ``options={"reset_mask": mask}`` (a boolean array,
+        one per env) resets the masked envs alone; other options are errors."""
+        native = self._open()
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        if options:
+            raise ValueError(
+                f"reset() options {sorted(options)} are not understood; the one option is "
+                "`reset_mask`, a boolean array with one value per env"
+            )
+        if mask is not None:
+            if seed is not None:
+                raise ValueError("reset() takes `seed` or a `reset_mask`, not both")
+            mask = np.asarray(mask)
+            if mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
+                raise ValueError(
+                    f"reset_mask must be a boolean array of shape ({self.num_envs},), got "
+                    f"{mask.dtype} {mask.shape}"
+                )
+            native.reset_envs([int(i) for i in np.flatnonzero(mask)])
+            self._fresh = False
+            return native.observations(), {}
         if seed is not None:
             self.native = self.native.reseeded(int(seed))
             self.native.keep_final_observations(self.keep_final_obs)
@@ -85,6 +116,7 @@ class OrbitVectorEnv(VectorEnv):
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Applies one action per env; see the class docs for what comes back."""
+        self._open()
         self._fresh = False
         actions = np.ascontiguousarray(actions, dtype=np.float32)
         if actions.ndim == 1 and self.native.num_actions == 1:
@@ -96,10 +128,10 @@ class OrbitVectorEnv(VectorEnv):
         if log:
             infos["log"] = log
         if done.any():
-            infos["_final_obs"] = done
             infos["_final_info"] = done.copy()
             infos["final_info"] = {}
             if self.keep_final_obs:
+                infos["_final_obs"] = done
                 rows = list(self.native.final_observations(done))
                 final = np.empty(self.num_envs, dtype=object)
                 # One row view per finished env, placed without a Python loop.
@@ -109,7 +141,7 @@ class OrbitVectorEnv(VectorEnv):
 
     def critic_observations(self) -> np.ndarray:
         """The critic's observations (group ``critic``, else ``policy``) of the current step."""
-        return self.native.critic_observations()
+        return self._open().critic_observations()
 
     def close_extras(self, **kwargs: Any) -> None:
         """Drops the native envs."""

@@ -19,8 +19,9 @@ class Sb3VecEnvWrapper(VecEnv):
     observation the episode ended in (``terminal_observation``) and whether a time-out ended
     it (``TimeLimit.truncated``), which SB3's PPO bootstraps. The envs are seeded when built
     (``orbit_rs.make(seed=…)``); ``seed()`` builds them again from a new seed at the next
-    reset. SB3 takes only bounded action spaces: an unbounded one (the tasks' own) becomes
-    ``[-100, 100]``, as Isaac Lab's adapter makes it.
+    reset. SB3 takes only bounded action spaces: the env's bounds (where its action terms
+    saturate) are kept, and each unbounded value gets ``[-100, 100]``, as Isaac Lab's adapter
+    makes an unbounded space.
     """
 
     def __init__(self, env: OrbitVectorEnv):
@@ -28,8 +29,12 @@ class Sb3VecEnvWrapper(VecEnv):
         action_space = env.single_action_space
         if not action_space.is_bounded("both"):
             # SB3 takes only bounded boxes (its PPO clips actions to them); as Isaac Lab's
-            # adapter does, an unbounded action space becomes [-100, 100].
-            action_space = gym.spaces.Box(-100.0, 100.0, action_space.shape, np.float32)
+            # adapter does, an unbounded value gets [-100, 100].
+            low = np.where(np.isfinite(action_space.low), action_space.low, -100.0)
+            high = np.where(np.isfinite(action_space.high), action_space.high, 100.0)
+            action_space = gym.spaces.Box(
+                low.astype(np.float32), high.astype(np.float32), action_space.shape, np.float32
+            )
         super().__init__(env.num_envs, env.single_observation_space, action_space)
         self._actions: np.ndarray | None = None
 
@@ -50,11 +55,11 @@ class Sb3VecEnvWrapper(VecEnv):
         dones = terminated | truncated
         # SB3 takes a dict per env: the finished envs' hold their episodes' last observation.
         env_infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
-        if "final_obs" in infos:
-            final = infos["final_obs"]
-            for i in np.flatnonzero(dones):
+        final = infos.get("final_obs")
+        for i in np.flatnonzero(dones):
+            env_infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+            if final is not None:
                 env_infos[i]["terminal_observation"] = final[i]
-                env_infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
         return obs, rewards, dones, env_infos
 
     def close(self) -> None:
