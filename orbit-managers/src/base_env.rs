@@ -196,6 +196,21 @@ pub struct ManagerBasedEnv {
     pre_step: Option<StateSnapshot>,
 }
 
+/// Where the value at `field` of `doc` was written (`file:line:col`, or the override), or the
+/// nearest enclosing value that was written.
+fn written_at(doc: &Node, field: &str) -> String {
+    let mut path = field;
+    loop {
+        if let Some(node) = orbit_core::config::node_at(doc, path) {
+            return node.span.location();
+        }
+        match path.rfind(['.', '[']) {
+            Some(cut) => path = &path[..cut],
+            None => return doc.span.location(),
+        }
+    }
+}
+
 impl ManagerBasedEnv {
     /// Builds the env from a config document (see [`EnvCfg`]).
     pub fn from_document(doc: &Node) -> Result<Self, EnvError> {
@@ -222,7 +237,15 @@ impl ManagerBasedEnv {
         max_episode_length: u32,
     ) -> Result<Self, EnvError> {
         let file = doc.span.file.display().to_string();
-        let desc = orbit_assets::resolve_scene(&cfg.scene, &file, None)?;
+        let desc = orbit_assets::resolve_scene(&cfg.scene, &file, None).map_err(|e| match e {
+            // Blame the file (an include, an override) and line that wrote the field, the
+            // nearest enclosing one where the field is a default.
+            orbit_assets::AssetError::Scene { source, .. } => orbit_assets::AssetError::Scene {
+                file: written_at(doc, source.field()),
+                source,
+            },
+            other => other,
+        })?;
         let backend = build_backend(&desc, cfg.num_envs, &cfg.sim)?;
         let scene = Scene::new(backend, desc);
         let n = scene.num_envs();

@@ -21,6 +21,18 @@ impl fmt::Display for Span {
     }
 }
 
+impl Span {
+    /// Where the value was written, for an error: `file:line:col`, or the override as the
+    /// user typed it (one line, so its text says more than a position).
+    pub fn location(&self) -> String {
+        if super::overrides::is_override_file(&self.file) {
+            self.file.display().to_string()
+        } else {
+            self.to_string()
+        }
+    }
+}
+
 /// A RON value together with the place it was written.
 ///
 /// Equality compares the values only and ignores spans.

@@ -175,6 +175,19 @@ pub enum SceneError {
     },
 }
 
+impl SceneError {
+    /// The config field path the error is about.
+    pub fn field(&self) -> &str {
+        match self {
+            SceneError::BadRegex { field, .. }
+            | SceneError::NoMatch { field, .. }
+            | SceneError::Ambiguous { field, .. }
+            | SceneError::Asset { field, .. }
+            | SceneError::Invalid { field, .. } => field,
+        }
+    }
+}
+
 /// Loads an articulation model from its source (URDF import lives in `orbit-assets`).
 pub type ModelLoader<'a> = dyn Fn(&AssetSource) -> Result<ArticulationModel, String> + 'a;
 

@@ -52,6 +52,22 @@ fn a_term_error_names_the_file_and_line_of_the_term() {
     );
 }
 
+/// A scene error blames the override that wrote the value, not the task's bundled file.
+#[test]
+fn a_scene_error_names_the_override_that_caused_it() {
+    let joint_pos = "scene.articulations.robot.init_state.joint_pos";
+    let o = [
+        "sim.backend=\"rapier\"".to_string(),
+        format!("{joint_pos}={{\"slider_to_cart\": 99.0, \"cart_to_pole\": 0.0}}"),
+    ];
+    let message = make(TASK_ID, &o).err().expect("refused").to_string();
+    assert!(
+        message.starts_with(&format!("override `{joint_pos}=")),
+        "{message}"
+    );
+    assert!(message.contains("init_state.joint_pos"), "{message}");
+}
+
 /// Numbers outside their ranges are refused when the env is built, each error naming the
 /// field, the value and the range (they would hang a run or simulate something else).
 #[test]
