@@ -240,7 +240,8 @@ fn resolve_configs(
     }
     let agent_doc = orbit_managers::load_config(&agent_file, &agent_overrides)
         .map_err(|err| RlError::AgentConfig(err.to_string()))?;
-    let agent: RunnerCfg = orbit_core::config::from_node(&agent_doc)?;
+    let agent: RunnerCfg = orbit_core::config::from_node(&agent_doc)
+        .map_err(|err| RlError::AgentConfig(err.to_string()))?;
     agent.validate(&agent_file.display().to_string())?;
     let mut env_overrides = agent.env_overrides.clone();
     env_overrides.extend(user_env);

@@ -44,6 +44,14 @@ fn zero_iterations_steps_or_episodes_are_errors() {
         "no run directory is made for a run that cannot start"
     );
 
+    // No envs is blamed on `num_envs`, not on the minibatches it leaves without transitions.
+    let args = TrainArgs::parse_from(["train", "--task", "Reach-Franka-v0", "--num-envs", "0"]);
+    let message = train(&args, false).err().expect("an error").to_string();
+    assert!(
+        message.contains("field `num_envs`") && !message.contains("num_mini_batches"),
+        "{message}"
+    );
+
     let args = AgentArgs::parse_from(["random_agent", "--steps", "0"]);
     let message = run(&args, false).unwrap_err().to_string();
     assert!(message.contains("--steps"), "{message}");
