@@ -37,6 +37,22 @@ fn a_cart_off_the_rail_is_terminated_with_the_penalty() {
     assert!((reward + 2.0 / 60.0).abs() < 1e-5, "reward {reward}");
 }
 
+/// Each value of an observation row is traced to its term (what a non-finite observation's
+/// error names): the cart-pole's 4 values are two joint positions, then two velocities.
+#[test]
+fn observation_values_are_traced_to_their_terms() {
+    let o = [
+        "num_envs=1".to_string(),
+        "sim.backend=\"rapier\"".to_string(),
+    ];
+    let env = make(TASK_ID, &o).unwrap();
+    let at = |i| env.observation_term_at("policy", i);
+    assert_eq!(at(1).as_deref(), Some("joint_pos_rel[1]"));
+    assert_eq!(at(2).as_deref(), Some("joint_vel_rel[0]"));
+    assert_eq!(at(4), None);
+    assert_eq!(env.observation_term_at("critic", 0), None);
+}
+
 /// A term's error names the file and line of the term's config (here the bundled file).
 #[test]
 fn a_term_error_names_the_file_and_line_of_the_term() {
