@@ -20,6 +20,14 @@ struct Schema {
 
 /// The position and orientation attributes of an element placed in its body's frame.
 const POSE: &[&str] = &["pos", "quat", "euler", "axisangle", "zaxis", "xyaxes"];
+/// Values of otherwise unsimulated attributes that the engines' model matches: frictional
+/// contacts of three dimensions, no margin or gap, equal priority.
+const SIMULATED_VALUES: &[(&str, &str)] = &[
+    ("condim", "3"),
+    ("margin", "0"),
+    ("gap", "0"),
+    ("priority", "0"),
+];
 /// Attributes that only draw or label: MuJoCo's rendering groups, colours and user data.
 const VISUAL: &[&str] = &["rgba", "material", "group", "user"];
 
@@ -89,7 +97,7 @@ pub(crate) fn check(
     let Some(schema) = schema(as_element) else {
         return Ok(());
     };
-    for (key, _) in &element.attrs {
+    for (key, value) in &element.attrs {
         let key = key.as_str();
         // `class` selects a default class on every element that has one.
         let read = schema.read.contains(&key) || (schema.posed && POSE.contains(&key));
@@ -97,6 +105,9 @@ pub(crate) fn check(
             continue;
         }
         if schema.not_simulated.contains(&key) {
+            if SIMULATED_VALUES.contains(&(key, value.trim())) {
+                continue;
+            }
             let lines = (unsimulated.0)
                 .entry((as_element.to_string(), key.to_string()))
                 .or_default();
@@ -158,4 +169,32 @@ fn check_tree(
         check_tree(file, child, unsimulated)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `condim="3"` is the engines' own contact model and passes silently; a margin is warned
+    /// with its line; a typo is an error.
+    #[test]
+    fn only_values_the_engines_do_not_simulate_are_warned() {
+        let geom = |attrs: &[(&str, &str)]| Element {
+            name: "geom".into(),
+            attrs: attrs
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+            children: Vec::new(),
+            line: 7,
+        };
+        let mut unsimulated = Unsimulated::default();
+        let e = geom(&[("condim", "3"), ("margin", "0.01"), ("rgba", "1 0 0 1")]);
+        check("a.xml", &e, "geom", &mut unsimulated).unwrap();
+        let warned: Vec<_> = unsimulated.0.iter().collect();
+        assert_eq!(warned.len(), 1);
+        assert_eq!(warned[0].0, &("geom".to_string(), "margin".to_string()));
+        assert_eq!(warned[0].1, &vec![7]);
+        assert!(check("a.xml", &geom(&[("densty", "3")]), "geom", &mut unsimulated).is_err());
+    }
 }
