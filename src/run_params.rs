@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use orbit_rl::run_dir::{ENV_CONFIG_FILE, PARAMS_DIR};
+use orbit_rl::run_dir::{ENV_CONFIG_FILE, checkpoint_params_dir};
 
 use crate::RunConfigs;
 use crate::train::{AGENT_CONFIG_FILE, BLACK_BOX_CONFIG_FILE};
@@ -26,11 +26,6 @@ pub struct GivenFiles {
     pub black_box: bool,
 }
 
-/// The `params/` directory of the run that wrote the checkpoint `base` (`<run>/model_<it>`).
-pub fn params_dir(base: &Path) -> PathBuf {
-    base.with_file_name(PARAMS_DIR)
-}
-
 /// Replaces each config of `configs` that was not given on the command line by the file of the
 /// run that wrote `checkpoint`, where the run has one (none with `--registered-config`), and
 /// returns a line that says which configs the env and agent are built from.
@@ -38,27 +33,27 @@ pub fn choose_configs(configs: &mut RunConfigs, checkpoint: &Path, given: GivenF
     if given.registered {
         return "configs: the task's registered ones (--registered-config)".into();
     }
-    let dir = params_dir(checkpoint);
+    let dir = checkpoint_params_dir(checkpoint);
     let mut used = Vec::new();
-    let mut take = |name: &str, slot: &mut Option<PathBuf>, given: bool| {
+    // The run's file `name`, where `wanted` and the run has it.
+    let mut from_run = |name: &str, wanted: bool| -> Option<PathBuf> {
         let file = dir.join(name);
-        if !given && slot.is_some() && file.is_file() {
-            *slot = Some(file);
+        (wanted && file.is_file()).then(|| {
             used.push(name.to_string());
-        }
+            file
+        })
     };
-    let mut env = Some(configs.env.clone());
-    take(ENV_CONFIG_FILE, &mut env, given.env);
-    configs.env = env.expect("kept or replaced");
-    take(AGENT_CONFIG_FILE, &mut configs.agent, given.agent);
-    take(
-        BLACK_BOX_CONFIG_FILE,
-        &mut configs.black_box,
-        given.black_box,
-    );
-    if used.iter().any(|u| u == AGENT_CONFIG_FILE) {
+    if let Some(file) = from_run(ENV_CONFIG_FILE, !given.env) {
+        configs.env = file;
+    }
+    if let Some(file) = from_run(AGENT_CONFIG_FILE, !given.agent && configs.agent.is_some()) {
+        configs.agent = Some(file);
         // The run's agent config is the one it trained with, CPU-sized or not.
         configs.cpu_agent = None;
+    }
+    let black_box = !given.black_box && configs.black_box.is_some();
+    if let Some(file) = from_run(BLACK_BOX_CONFIG_FILE, black_box) {
+        configs.black_box = Some(file);
     }
     if used.is_empty() {
         format!(

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use orbit_core::config::{Node, NodeKind, is_bundled};
 use sha2::{Digest, Sha256};
 
-use crate::bundled::bundled;
+use crate::bundled::{Found, bundled, find_file};
 
 /// The enum variants of `AssetSource` that name a file.
 const FILE_SOURCES: &[&str] = &["Urdf", "Mjcf"];
@@ -64,9 +64,12 @@ pub fn asset_record(doc: &Node) -> String {
     });
     let mut out = String::from("[\n");
     for path in seen {
-        let (loaded, bytes) = match bundled(&path).filter(|_| !is_explicit_path(&path)) {
-            Some(text) => (format!("<bundled>/{path}"), Some(text.as_bytes().to_vec())),
-            None => (path.clone(), std::fs::read(&path).ok()),
+        let (loaded, bytes) = match find_file(&path, None) {
+            Ok(Found::Bundled(text)) => {
+                (format!("<bundled>/{path}"), Some(text.as_bytes().to_vec()))
+            }
+            Ok(Found::File(file)) => (file.display().to_string(), std::fs::read(&file).ok()),
+            Err(_) => (path.clone(), None),
         };
         let hash = bytes.map_or("None".to_string(), |b| {
             let digest = Sha256::digest(&b);

@@ -159,7 +159,7 @@ pub fn load_model(
 }
 
 /// Where an asset file was found.
-enum Found {
+pub(crate) enum Found {
     File(std::path::PathBuf),
     Bundled(&'static str),
 }
@@ -167,7 +167,7 @@ enum Found {
 /// The bundled file named `path` unless the path is explicit (absolute, `./…`, `../…`; see
 /// [`is_explicit_path`]), else the file at `path` (relative to `base_dir` when given): a file
 /// that happens to share a bundled asset's name never replaces it.
-fn find_file(path: &str, base_dir: Option<&Path>) -> Result<Found, AssetError> {
+pub(crate) fn find_file(path: &str, base_dir: Option<&Path>) -> Result<Found, AssetError> {
     if !is_explicit_path(path)
         && let Some(text) = bundled(path)
     {

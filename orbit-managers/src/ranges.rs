@@ -140,13 +140,7 @@ impl Ranges<'_> {
     /// An error at the node of `field` (the document's start for a default value).
     fn error(&self, field: &str, message: String) -> EnvError {
         let span = node_at(self.doc, field).map_or(&self.doc.span, |n| &n.span);
-        EnvError::Config(ConfigError::Invalid {
-            file: span.file.to_path_buf(),
-            line: span.line,
-            col: span.col,
-            path: field.to_string(),
-            message,
-        })
+        EnvError::Config(ConfigError::invalid_at(span, field, message))
     }
 
     /// `lo <= value <= hi` (NaN fails), `unit` naming what is counted.

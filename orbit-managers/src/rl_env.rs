@@ -187,9 +187,7 @@ impl ManagerBasedRlEnv {
     /// Resets every env and computes the first observations.
     pub fn reset(&mut self) -> Result<(), EnvError> {
         let all: Vec<usize> = (0..self.num_envs()).collect();
-        self.reset_idx(&all)?;
-        self.base.compute_observations();
-        Ok(())
+        self.reset_envs(&all)
     }
 
     /// Resets the listed envs between steps and computes the observations (a partial reset

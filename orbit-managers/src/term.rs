@@ -49,17 +49,15 @@ impl TermContext<'_> {
         }
     }
 
-    /// An error about this term.
-    /// It names the file, line and column of the term's config where they are known.
+    /// An error about this term, naming the file, line and column of the term's config where
+    /// they are known.
     pub fn error(&self, message: impl Into<String>) -> EnvError {
         match &self.at {
-            Some(span) => EnvError::Config(orbit_core::config::ConfigError::Invalid {
-                file: span.file.to_path_buf(),
-                line: span.line,
-                col: span.col,
-                path: self.field.clone(),
-                message: message.into(),
-            }),
+            Some(span) => EnvError::Config(orbit_core::config::ConfigError::invalid_at(
+                span,
+                self.field.clone(),
+                message,
+            )),
             None => EnvError::InvalidTerm {
                 field: self.field.clone(),
                 message: message.into(),

@@ -13,9 +13,14 @@ pub const PARAMS_DIR: &str = "params";
 /// The resolved env config in [`PARAMS_DIR`].
 pub const ENV_CONFIG_FILE: &str = "env.ron";
 
+/// The `params/` directory of the run that wrote the checkpoint `base` (`<run>/model_<it>`).
+pub fn checkpoint_params_dir(base: &Path) -> PathBuf {
+    base.with_file_name(PARAMS_DIR)
+}
+
 /// The resolved env config of the run that wrote the checkpoint `base` (`<run>/model_<it>`).
 pub fn checkpoint_env_config(base: &Path) -> PathBuf {
-    base.with_file_name(PARAMS_DIR).join(ENV_CONFIG_FILE)
+    checkpoint_params_dir(base).join(ENV_CONFIG_FILE)
 }
 
 /// The directory of a new run under `log_root/<experiment>/`, named by the local time.

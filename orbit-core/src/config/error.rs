@@ -68,6 +68,17 @@ pub enum ConfigError {
 }
 
 impl ConfigError {
+    /// A value at `span` (field path `path`) that does not fit what is expected.
+    pub fn invalid_at(span: &Span, path: impl Into<String>, message: impl Into<String>) -> Self {
+        ConfigError::Invalid {
+            file: span.file.to_path_buf(),
+            line: span.line,
+            col: span.col,
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+
     /// A parse error at `span`.
     pub(crate) fn parse_at(span: &Span, message: impl Into<String>) -> Self {
         ConfigError::Parse {
@@ -89,20 +100,21 @@ fn io_message(file: &std::path::Path, from: Option<&Span>, source: &std::io::Err
     }
 }
 
-fn invalid_message(file: &std::path::Path, line: u32, col: u32, path: &str, msg: &str) -> String {
+/// Where a value was written: `file:line:col`, or for an override its text alone (one line the
+/// user typed: its text says more than a position).
+pub(crate) fn location(file: &std::path::Path, line: u32, col: u32) -> String {
     if super::overrides::is_override_file(file) {
-        // An override is one line the user typed: its text says more than a position.
-        let file = file.display();
-        return if path.is_empty() {
-            format!("{file}: {msg}")
-        } else {
-            format!("{file}: {path}: {msg}")
-        };
-    }
-    let file = file.display();
-    if path.is_empty() {
-        format!("{file}:{line}:{col}: {msg}")
+        file.display().to_string()
     } else {
-        format!("{file}:{line}:{col}: {path}: {msg}")
+        format!("{}:{line}:{col}", file.display())
+    }
+}
+
+fn invalid_message(file: &std::path::Path, line: u32, col: u32, path: &str, msg: &str) -> String {
+    let at = location(file, line, col);
+    if path.is_empty() {
+        format!("{at}: {msg}")
+    } else {
+        format!("{at}: {path}: {msg}")
     }
 }

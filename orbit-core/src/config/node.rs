@@ -25,11 +25,7 @@ impl Span {
     /// Where the value was written, for an error: `file:line:col`, or the override as the
     /// user typed it (one line, so its text says more than a position).
     pub fn location(&self) -> String {
-        if super::overrides::is_override_file(&self.file) {
-            self.file.display().to_string()
-        } else {
-            self.to_string()
-        }
+        super::error::location(&self.file, self.line, self.col)
     }
 }
 

@@ -24,9 +24,9 @@ class OrbitVectorEnv(VectorEnv):
     A black-box task's step is one movement primitive; its action is the primitive's
     parameters.
 
-    The action space is bounded where the task's action terms saturate (a clip, or an effort
-    limit over the action's scale): actions beyond the bounds act as the bounds do. It is
-    unbounded elsewhere. ``reset(options={"reset_mask": mask})`` resets the masked envs alone.
+    The action space is bounded where an action acts the same beyond a bound in every state (an
+    action term's clip, or an effort limit over the action's scale where nothing else adds to
+    that effort). It is unbounded elsewhere. ``reset(options={"reset_mask": mask})`` resets the masked envs alone.
 
     Observations are the ``policy`` group; the ``critic`` group, if the task has one, is
     ``critic_observations()``. Arrays are ``float32`` numpy arrays, new on every call; pass
