@@ -234,8 +234,14 @@ fn malformed_documents_name_line_element_and_attribute() {
             "test.xml:7: <geom> attribute `size`: -0.1 must be positive",
         ),
         (
-            body("<joint stiffness=\"20\"/><geom size=\"0.1\"/>"),
-            "test.xml:7: <joint> attribute `stiffness`: joint springs (20) are not imported",
+            body("<joint stiffness=\"-20\"/><geom size=\"0.1\"/>"),
+            "test.xml:7: <joint> attribute `stiffness`: -20 must be >= 0",
+        ),
+        (
+            "<mujoco>\n<worldbody>\n<body>\n<geom size=\"1\"/>\n</body>\n</worldbody>\n\
+             <actuator>\n<general joint=\"j\" biastype=\"affine\"/>\n</actuator>\n</mujoco>"
+                .to_string(),
+            "test.xml:8: <general> attribute `biastype`: not an attribute",
         ),
         (
             body("<joint range=\"30 10\"/><geom size=\"0.1\"/>"),
@@ -318,6 +324,39 @@ fn malformed_documents_name_line_element_and_attribute() {
             .to_string();
         assert!(message.contains(expected), "`{expected}` not in: {message}");
     }
+}
+
+/// Joint springs keep MuJoCo's values (`qpos_spring` in radians for a hinge of a file in degrees,
+/// as MuJoCo compiles it), and a `<general>` with MuJoCo's default gain, bias and dynamics is a
+/// motor.
+#[test]
+fn joint_springs_and_general_actuators_import() {
+    let doc = "<mujoco><worldbody><body><freejoint/><geom size=\"0.1\"/>\
+               <body><joint name=\"h\" stiffness=\"20\" springref=\"30\"/><geom size=\"0.1\"/></body>\
+               <body><joint name=\"s\" type=\"slide\" stiffness=\"5\" springref=\"0.2\"/>\
+               <geom size=\"0.1\"/></body></body></worldbody>\
+               <actuator><general joint=\"h\" gear=\"3\"/></actuator></mujoco>";
+    let model = model_from_mjcf_str(doc, "springs.xml").unwrap();
+    let joint = |name: &str| {
+        (model.articulation.links.iter())
+            .filter_map(|l| l.joint.as_ref())
+            .find(|j| j.name == name)
+            .unwrap()
+            .clone()
+    };
+    let (h, s) = (joint("h"), joint("s"));
+    assert_eq!((h.spring_stiffness, s.spring_stiffness), (20.0, 5.0));
+    assert!(
+        (h.spring_ref - 30f32.to_radians()).abs() < 1e-7,
+        "{}",
+        h.spring_ref
+    );
+    assert_eq!(s.spring_ref, 0.2);
+    assert_eq!(model.actuators.len(), 1);
+    assert_eq!(
+        (model.actuators[0].joint.as_str(), model.actuators[0].gear),
+        ("h", 3.0)
+    );
 }
 
 /// Visual attributes are ignored and MuJoCo's contact settings accepted (with a warning that

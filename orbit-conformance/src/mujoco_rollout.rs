@@ -10,6 +10,8 @@ use orbit_core::physics::PhysicsBackend;
 use orbit_core::scene::{SceneCfg, SceneDesc};
 use serde::Deserialize;
 
+use orbit_core::scene::AssetSource;
+
 use crate::scenes::{build, floating_ant, ground, resolve};
 
 #[derive(Deserialize)]
@@ -85,14 +87,40 @@ pub struct FreeFallAgreement {
 /// Replays MuJoCo's Ant rollout: the same initial state (tilted, moving, spinning), the same
 /// joint torques every 2 ms step, on the ground plane. Prints and returns the agreement.
 pub fn ant_mujoco_rollout(backend: &str) -> FreeFallAgreement {
+    let data = include_str!("../data/mujoco_ant_rollout.json");
+    replay_ant("ant", backend, data)
+}
+
+/// Replays an Ant rollout `data` on the bundled Ant over the ground plane.
+fn replay_ant(name: &str, backend: &str, data: &str) -> FreeFallAgreement {
     let cfg = SceneCfg {
         env_spacing: 3.0,
         articulations: vec![floating_ant()],
         rigid_objects: vec![],
         static_objects: vec![ground(1.0)],
     };
-    let data = include_str!("../data/mujoco_ant_rollout.json");
-    replay("ant", backend, resolve(&cfg), data, Vec3::ZERO)
+    replay(
+        name,
+        backend,
+        resolve(&cfg),
+        data,
+        Vec3::ZERO,
+        GainsIn::Drives,
+    )
+}
+
+/// Replays MuJoCo's rollout of the Ant standing on the ground (joint armature 1, large against
+/// its legs' inertias) under joint torques, in contact from its first step. Prints and returns
+/// the agreement (all of it is `whole`).
+pub fn ant_standing_mujoco_rollout(backend: &str) -> FreeFallAgreement {
+    let data = include_str!("../data/mujoco_ant_standing_rollout.json");
+    replay_ant("ant_standing", backend, data)
+}
+
+/// Asserts that the Ant stands as MuJoCo's does, within `tolerance` over the whole second of
+/// the rollout, every record in contact with the ground.
+pub fn ant_stands_like_mujoco(backend: &str, tolerance: StateError) {
+    assert_within(ant_standing_mujoco_rollout(backend).whole, tolerance);
 }
 
 /// Replays MuJoCo's Humanoid rollout: the `humanoid` asset (its drives towards 0 are MuJoCo's
@@ -105,7 +133,45 @@ pub fn humanoid_mujoco_rollout(backend: &str, offset: Vec3) -> FreeFallAgreement
     let scene = orbit_assets::load_scene(&file, &[])
         .unwrap_or_else(|e| panic!("the humanoid scene does not resolve: {e}"));
     let data = include_str!("../data/mujoco_humanoid_rollout.json");
-    replay("humanoid", backend, scene, data, offset)
+    replay("humanoid", backend, scene, data, offset, GainsIn::Drives)
+}
+
+/// Replays MuJoCo's Humanoid rollout on `tools/humanoid_standing.xml` imported as it is, on the
+/// ground plane: its joint springs (`stiffness`) and dampers are the model's own, simulated as
+/// MuJoCo does (the spring explicit, the damping implicit), and no drive acts. Prints and
+/// returns the agreement.
+pub fn humanoid_springs_mujoco_rollout(backend: &str) -> FreeFallAgreement {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/humanoid_standing.xml");
+    let mut robot = floating_ant();
+    robot.name = "humanoid".into();
+    robot.spawn = AssetSource::Mjcf {
+        path: file.display().to_string(),
+    };
+    robot.self_collisions = true;
+    let cfg = SceneCfg {
+        env_spacing: 5.0,
+        articulations: vec![robot],
+        rigid_objects: vec![],
+        static_objects: vec![ground(1.0)],
+    };
+    let data = include_str!("../data/mujoco_humanoid_rollout.json");
+    replay(
+        "humanoid_springs",
+        backend,
+        resolve(&cfg),
+        data,
+        Vec3::ZERO,
+        GainsIn::Joints,
+    )
+}
+
+/// Where the model carries MuJoCo's joint springs and dampers.
+#[derive(Clone, Copy, PartialEq)]
+enum GainsIn {
+    /// As drives towards 0 (Isaac Lab's implicit actuators).
+    Drives,
+    /// As the joints' own passive springs and damping (MuJoCo's).
+    Joints,
 }
 
 /// Replays rollout `data` on the first articulation of `scene`, from the rollout's initial
@@ -116,6 +182,7 @@ fn replay(
     mut scene: SceneDesc,
     data: &str,
     offset: Vec3,
+    carried: GainsIn,
 ) -> FreeFallAgreement {
     let data: Rollout = serde_json::from_str(data).expect("rollout");
     let init = &data.initial;
@@ -131,11 +198,19 @@ fn replay(
     robot.root_ang_vel = Vec3::from(init.ang_vel);
     robot.default_joint_pos = init.joint_pos.clone();
     if let Some(gains) = &data.gains {
-        for (d, drive) in robot.drives.iter().enumerate() {
+        let joints = robot.model.dof_links().into_iter().map(|l| {
+            let j = robot.model.links[l].joint.as_ref().expect("a dof's joint");
+            (j.spring_stiffness, j.damping)
+        });
+        for ((d, drive), (spring, damping)) in robot.drives.iter().enumerate().zip(joints) {
+            let carried = match carried {
+                GainsIn::Drives => (drive.stiffness, drive.damping),
+                GainsIn::Joints => (spring, damping),
+            };
             assert_eq!(
-                (drive.stiffness, drive.damping),
+                carried,
                 (gains.stiffness[d], gains.damping[d]),
-                "joint `{}`: the asset's drive gains against MuJoCo's spring and damper",
+                "joint `{}`: the model's gains against MuJoCo's spring and damper",
                 data.joints[d]
             );
         }
@@ -221,13 +296,24 @@ pub fn humanoid_tracks_mujoco_rollout_far_from_origin(backend: &str, tolerance: 
     assert_agreement(humanoid_mujoco_rollout(backend, offset), tolerance, 20);
 }
 
+/// Asserts that the Humanoid imported with MuJoCo's joint springs and dampers
+/// (`tools/humanoid_standing.xml`) tracks MuJoCo's rollout before its first contact within
+/// `tolerance`; the whole rollout is reported, not asserted.
+pub fn humanoid_springs_track_mujoco_rollout(backend: &str, tolerance: StateError) {
+    assert_agreement(humanoid_springs_mujoco_rollout(backend), tolerance, 20);
+}
+
 /// Asserts `a` within `tolerance` over at least `records` records before the first contact.
 fn assert_agreement(a: FreeFallAgreement, tolerance: StateError, records: usize) {
     assert!(
         a.records_before_contact >= records,
         "the fall spans {records} records"
     );
-    let (e, tol) = (a.before_contact, tolerance);
+    assert_within(a.before_contact, tolerance);
+}
+
+/// Asserts each of `e`'s differences within `tol`'s.
+fn assert_within(e: StateError, tol: StateError) {
     assert!(
         e.root_pos <= tol.root_pos,
         "root position off by {} m (tolerance {})",

@@ -8,6 +8,8 @@ Usage (from the workspace root):
         > orbit-conformance/data/mujoco_ant_rollout.json
     python3 orbit-conformance/tools/mujoco_rollout.py humanoid \
         orbit-assets/assets/isaac_humanoid.xml > orbit-conformance/data/mujoco_humanoid_rollout.json
+    python3 orbit-conformance/tools/mujoco_rollout.py ant_standing orbit-assets/assets/ant.xml \
+        > orbit-conformance/data/mujoco_ant_standing_rollout.json
 
 Needs `pip install mujoco numpy`. Each 2 ms step applies the torques to the joints
 (`qfrc_applied`, no actuators involved) with MuJoCo's default settings (semi-implicit Euler
@@ -19,6 +21,11 @@ positions, and the time of the first contact.
 
 - `ant`: the Ant starts 1 m up, hips near 0 and ankles at +-50 degrees; sinusoidal torques of
   4 N m on its eight joints.
+- `ant_standing`: the Ant (joint armature 1, large against its legs' inertias) standing on
+  the ground from Gymnasium's start (torso 0.55 m up, level and at rest, hips at 0, ankles at
+  +-1 rad) under sinusoidal torques of 2 N m, in contact from the first step; the geoms'
+  `margin` is set to 0 (the engines compared with it do not simulate margins), so MuJoCo's
+  contacts act at touch as theirs do.
 - `humanoid`: the Humanoid of the `humanoid` asset config, whose drives towards 0 are joint
   springs and dampers here (`GAINS`, written to the file so that the replay checks they are
   the asset's), starts 2 m up with every joint 0.25 rad or more inside its range; each joint's
@@ -69,6 +76,16 @@ def ant_start(model, joints):
     return 1.0, joint_pos, torque, None
 
 
+def ant_standing_start(model, joints):
+    model.geom_margin[:] = 0.0
+    joint_pos = [0.0, 1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0]
+
+    def torque(j, t):
+        return 2.0 * math.sin(2.0 * math.pi * (1.0 + 0.25 * j) * t + 0.7 * j)
+
+    return 0.55, joint_pos, torque, None
+
+
 def humanoid_start(model, joints):
     stiffness, damping = zip(*(gains(n) for n in joints))
     for j, name in enumerate(joints):
@@ -94,15 +111,17 @@ def main():
     model = mujoco.MjModel.from_xml_path(path)
     model.opt.timestep = DT
     joints = [model.joint(j).name for j in range(1, model.njnt)]
-    height, joint_pos, torque, joint_gains = {"ant": ant_start, "humanoid": humanoid_start}[kind](
-        model, joints
-    )
+    starts = {"ant": ant_start, "ant_standing": ant_standing_start, "humanoid": humanoid_start}
+    height, joint_pos, torque, joint_gains = starts[kind](model, joints)
     data = mujoco.MjData(model)
     axis = np.array([1.0, 1.0, 0.0]) / math.sqrt(2.0)
     angle = 0.1
     quat_wxyz = np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
     lin_vel = np.array([0.3, -0.2, 0.5])
     ang_vel = np.array([0.4, -0.6, 1.0])
+    if kind == "ant_standing":
+        quat_wxyz = np.array([1.0, 0.0, 0.0, 0.0])
+        lin_vel, ang_vel = np.zeros(3), np.zeros(3)
     data.qpos[:3] = [0.0, 0.0, height]
     data.qpos[3:7] = quat_wxyz
     data.qpos[7:] = joint_pos

@@ -259,6 +259,13 @@ pub(crate) fn build_articulation(
         .iter()
         .map(|&l| model.links[l].joint.as_ref().map_or(0.0, |j| j.damping))
         .collect();
+    let springs = dof_link
+        .iter()
+        .map(|&l| {
+            let j = model.links[l].joint.as_ref().expect("dof link has a joint");
+            (j.spring_stiffness, j.spring_ref)
+        })
+        .collect();
     Ok(EnvArticulation {
         links,
         multibody,
@@ -271,6 +278,7 @@ pub(crate) fn build_articulation(
         root_com,
         out: ArticulationRow::new(n_dofs, n_links),
         joint_damping,
+        springs,
         effort: vec![0.0; n_dofs],
     })
 }

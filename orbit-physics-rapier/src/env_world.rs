@@ -44,6 +44,8 @@ pub(crate) struct EnvArticulation {
     pub out: ArticulationRow,
     /// Passive joint damping of each dof (the drive's damping is added while it is active).
     pub joint_damping: Vec<f32>,
+    /// Passive spring of each dof: stiffness and rest position.
+    pub springs: Vec<(f32, f32)>,
     /// Explicit effort applied to each dof in the current step.
     pub effort: Vec<f32>,
 }
@@ -354,12 +356,12 @@ impl EnvWorld {
                 .assembly_id();
             let mut effort = input.effort(d, &art.out.bias);
             let (mut k, mut q_rest, mut damping) = (0.0, 0.0, art.joint_damping[d]);
+            let q = mb
+                .link(art.dof_mb_link[d])
+                .expect("link exists")
+                .joint()
+                .coords()[art.dof_axis[d]];
             if drive.stiffness > 0.0 || drive.damping > 0.0 {
-                let q = mb
-                    .link(art.dof_mb_link[d])
-                    .expect("link exists")
-                    .joint()
-                    .coords()[art.dof_axis[d]];
                 let v = mb.generalized_velocity()[id];
                 let pd = drive.stiffness * (input.pos_target[d] - q)
                     + drive.damping * (input.vel_target[d] - v);
@@ -371,7 +373,10 @@ impl EnvWorld {
                     effort += pd;
                 }
             }
-            art.effort[d] = effort.clamp(-drive.effort_limit, drive.effort_limit);
+            // A passive spring (MuJoCo's joint `stiffness`) is explicit and no actuator's part.
+            let (spring, spring_ref) = art.springs[d];
+            art.effort[d] =
+                effort.clamp(-drive.effort_limit, drive.effort_limit) - spring * (q - spring_ref);
             mb.damping_mut()[id] = damping;
             let link = mb.link_mut(art.dof_mb_link[d]).expect("link exists");
             link.joint.set_spring(art.dof_axis[d], k, q_rest);

@@ -132,6 +132,31 @@ fn humanoid_tracks_mujoco_rollout() {
 }
 
 #[test]
+fn humanoid_springs_track_mujoco_rollout() {
+    // The joint springs are explicit as in MuJoCo; the root's position parts by semi-implicit
+    // Euler's variants as in `humanoid_tracks_mujoco_rollout`.
+    let tolerance = orbit_conformance::StateError {
+        joint_pos: 1e-3,
+        ..HUMANOID_TOLERANCE
+    };
+    orbit_conformance::humanoid_springs_track_mujoco_rollout(BACKEND_NAME, tolerance);
+}
+
+#[test]
+fn ant_stands_like_mujoco() {
+    // Standing is contact all along, and rapier's contacts are not MuJoCo's soft ones.
+    orbit_conformance::ant_stands_like_mujoco(BACKEND_NAME, ANT_STANDING_TOLERANCE);
+}
+
+/// The Ant standing beside MuJoCo over a second: a torso that sinks or a leg that folds is off
+/// by tenths; the contact models' differences (solver, friction cone) stay within these.
+const ANT_STANDING_TOLERANCE: orbit_conformance::StateError = orbit_conformance::StateError {
+    root_pos: 0.03,
+    root_rot: 0.06,
+    joint_pos: 0.04,
+};
+
+#[test]
 fn humanoid_tracks_mujoco_rollout_far_from_origin() {
     orbit_conformance::humanoid_tracks_mujoco_rollout_far_from_origin(
         BACKEND_NAME,

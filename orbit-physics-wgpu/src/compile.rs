@@ -115,6 +115,10 @@ pub struct DofData {
     pub effort_limit: f32,
     /// Joint speed limit.
     pub velocity_limit: f32,
+    /// Passive spring stiffness (an explicit effort `−spring (q − spring_ref)`).
+    pub spring: f32,
+    /// Rest position of the passive spring.
+    pub spring_ref: f32,
     /// Position limits (`±inf` when unlimited).
     pub lower: f32,
     /// Upper position limit.
@@ -132,6 +136,8 @@ impl DofData {
             drive_damping: 0.0,
             effort_limit: f32::INFINITY,
             velocity_limit: f32::INFINITY,
+            spring: 0.0,
+            spring_ref: 0.0,
             lower: f32::NEG_INFINITY,
             upper: f32::INFINITY,
         }
@@ -373,6 +379,8 @@ impl CompiledScene {
                         drive_damping: drive.damping,
                         effort_limit: drive.effort_limit,
                         velocity_limit: drive.velocity_limit,
+                        spring: j.spring_stiffness,
+                        spring_ref: j.spring_ref,
                         lower,
                         upper,
                     });

@@ -210,6 +210,34 @@ fn humanoid_tracks_mujoco_rollout() {
 }
 
 #[test]
+fn humanoid_springs_track_mujoco_rollout() {
+    // Explicit joint springs and implicit damping, as MuJoCo integrates them: what is left is
+    // f32 rounding.
+    let tolerance = orbit_conformance::StateError {
+        root_pos: 1e-4,
+        root_rot: 1e-5,
+        joint_pos: 1e-5,
+    };
+    if gpu_available() {
+        orbit_conformance::humanoid_springs_track_mujoco_rollout(BACKEND_NAME, tolerance);
+    }
+}
+
+#[test]
+fn ant_stands_like_mujoco() {
+    // Standing is contact all along: MuJoCo's soft contacts, but its Newton solver and
+    // pyramidal friction cone against projected Gauss–Seidel and a friction disk.
+    let tolerance = orbit_conformance::StateError {
+        root_pos: 0.03,
+        root_rot: 0.06,
+        joint_pos: 0.04,
+    };
+    if gpu_available() {
+        orbit_conformance::ant_stands_like_mujoco(BACKEND_NAME, tolerance);
+    }
+}
+
+#[test]
 fn humanoid_tracks_mujoco_rollout_far_from_origin() {
     if gpu_available() {
         orbit_conformance::humanoid_tracks_mujoco_rollout_far_from_origin(

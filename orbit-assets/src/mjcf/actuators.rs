@@ -1,4 +1,5 @@
-//! MJCF `<actuator>` motors and `<contact>` exclusions.
+//! MJCF `<actuator>` motors (`<motor>`, and `<general>` with MuJoCo's default gain, bias and
+//! dynamics, which makes it one) and `<contact>` exclusions.
 
 use super::defaults::MAIN;
 use super::xml::Element;
@@ -6,10 +7,10 @@ use super::{Importer, MjcfActuator};
 use crate::error::AssetError;
 
 impl<'a> Importer<'a> {
-    /// The `<motor>`s of `<actuator>` sections.
+    /// The `<motor>`s and `<general>`s of `<actuator>` sections.
     pub(super) fn actuators(&self, root: &'a Element) -> Result<Vec<MjcfActuator>, AssetError> {
         let mut actuators = Vec::new();
-        for element in self.section_elements(root, "actuator", "motor")? {
+        for element in self.section_elements(root, "actuator", &["motor", "general"])? {
             let a = self.defaults.attrs(self.file, element, MAIN)?;
             let joint = a.text("joint").ok_or_else(|| {
                 a.error(Some("joint"), "a motor needs the `joint` it drives".into())
@@ -38,7 +39,7 @@ impl<'a> Importer<'a> {
     /// The body pairs of `<contact><exclude>`.
     pub(super) fn excludes(&self, root: &'a Element) -> Result<Vec<[String; 2]>, AssetError> {
         let mut pairs = Vec::new();
-        for element in self.section_elements(root, "contact", "exclude")? {
+        for element in self.section_elements(root, "contact", &["exclude"])? {
             let a = self.plain(element);
             let body = |key: &str| -> Result<String, AssetError> {
                 let name = a.text(key).ok_or_else(|| {
@@ -54,22 +55,29 @@ impl<'a> Importer<'a> {
         Ok(pairs)
     }
 
-    /// The children of every `<section>` below `root`, each of which must be an `<element>`.
+    /// The children of every `<section>` below `root`, each of which must be one of `elements`.
     fn section_elements(
         &self,
         root: &'a Element,
         section: &str,
-        element: &str,
+        elements: &[&str],
     ) -> Result<Vec<&'a Element>, AssetError> {
         let children = (root.children.iter())
             .filter(|c| c.name == section)
             .flat_map(|s| &s.children);
         let mut found = Vec::new();
         for child in children {
-            if child.name != element {
+            if !elements.contains(&child.name.as_str()) {
+                let takes = elements
+                    .iter()
+                    .map(|e| format!("`<{e}>`"))
+                    .collect::<Vec<_>>();
                 return Err(self.unsupported(
                     child,
-                    &format!("not supported; the importer takes `<{element}>` in `<{section}>`"),
+                    &format!(
+                        "not supported; the importer takes {} in `<{section}>`",
+                        takes.join(" or ")
+                    ),
                 ));
             }
             found.push(child);

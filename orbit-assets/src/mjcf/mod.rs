@@ -1,11 +1,12 @@
 //! MJCF import (MuJoCo's XML format) for the subset the classic locomotion models use:
 //! bodies with positions and orientations (`quat`, `euler` in the `xyz` sequence, `axisangle`,
 //! `zaxis`), `<inertial>` or inertia from the geoms (`<compiler inertiafromgeom>`, density or
-//! `mass`), `hinge` and `slide` joints (range, limits, armature, damping, frictionloss; several
-//! in one body become a chain of massless links, composed in file order as MuJoCo does) or a
+//! `mass`), `hinge` and `slide` joints (range, limits, armature, damping, frictionloss, passive
+//! springs `stiffness` with `springref`; several in one body become a chain of massless links,
+//! composed in file order as MuJoCo does) or a
 //! `free` joint on the top-level body (a floating base), geoms (`sphere`,
 //! `capsule`, `box`, `cylinder`, with `fromto`; `plane` in the world body), `<default>`
-//! classes with `class`/`childclass`, `contype`/`conaffinity`, sites, `<motor>` actuators and
+//! classes with `class`/`childclass`, `contype`/`conaffinity`, sites, `<motor>` actuators (and plain `<general>` ones) and
 //! `<contact><exclude>`. Angles are in degrees unless `<compiler angle="radian">`.
 //!
 //! A body's joint may sit away from the body's origin (`<joint pos>`); the importer puts the
@@ -500,16 +501,6 @@ impl<'a> Importer<'a> {
                 v => Ok(v.unwrap_or(0.0) as f32),
             }
         };
-        if let Some(k) = a.number("stiffness")?.filter(|&k| k != 0.0) {
-            return Err(a.error(
-                Some("stiffness"),
-                format!(
-                    "joint springs ({k}) are not imported; give the stiffness to an actuator \
-                     group of the asset config (`actuators: {{..: (stiffness: ..)}}`, a drive \
-                     towards 0, as Isaac Lab's implicit actuators do) and remove it here"
-                ),
-            ));
-        }
         let joint = Joint {
             name: name.clone(),
             kind: joint_kind,
@@ -519,6 +510,8 @@ impl<'a> Importer<'a> {
             armature: non_negative("armature")?,
             damping: non_negative("damping")?,
             friction: non_negative("frictionloss")?,
+            spring_stiffness: non_negative("stiffness")?,
+            spring_ref: a.number("springref")?.map_or(0.0, |v| scale(v) as f32),
             effort_limit: None,
             velocity_limit: None,
         };

@@ -49,8 +49,8 @@ fn schema(element: &str) -> Option<Schema> {
               "impratio", "jacobian", "noslip_iterations", "gravity"]),
         "body" => s(true, &["name", "childclass"], &["user"], &[]),
         "joint" => s(false,
-            &["name", "type", "pos", "axis", "limited", "range", "stiffness", "armature",
-              "damping", "frictionloss"],
+            &["name", "type", "pos", "axis", "limited", "range", "stiffness", "springref",
+              "armature", "damping", "frictionloss"],
             &["group", "user"],
             &["solreflimit", "solimplimit", "solreffriction", "solimpfriction", "margin"]),
         "freejoint" => s(false, &["name"], &["group"], &[]),
@@ -61,7 +61,8 @@ fn schema(element: &str) -> Option<Schema> {
             &["condim", "priority", "solmix", "solref", "solimp", "margin", "gap"]),
         "site" => s(true, &["name"], &["type", "size", "fromto", "rgba", "material", "group", "user"], &[]),
         "inertial" => s(true, &["mass", "diaginertia", "fullinertia"], &[], &[]),
-        "motor" => s(false, &["name", "joint", "gear", "ctrllimited", "ctrlrange"], &["group", "user"], &[]),
+        // A `<general>` without gain, bias or dynamics attributes is a motor.
+        "motor" | "general" => s(false, &["name", "joint", "gear", "ctrllimited", "ctrlrange"], &["group", "user"], &[]),
         "exclude" => s(false, &["name", "body1", "body2"], &[], &[]),
         _ => None,
     }

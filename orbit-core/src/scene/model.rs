@@ -280,6 +280,13 @@ pub struct Joint {
     /// Dry (Coulomb) joint friction (N·m or N).
     #[serde(default)]
     pub friction: f32,
+    /// Stiffness of a passive joint spring (N·m/rad or N/m; MuJoCo's `stiffness`): an explicit
+    /// effort `−spring_stiffness (q − spring_ref)` every step, apart from any drive.
+    #[serde(default)]
+    pub spring_stiffness: f32,
+    /// Joint position at which the passive spring is relaxed (rad or m; MuJoCo's `springref`).
+    #[serde(default)]
+    pub spring_ref: f32,
     /// Effort limit declared by the asset (N·m or N), if any.
     #[serde(default)]
     pub effort_limit: Option<f32>,
@@ -300,6 +307,8 @@ impl Joint {
             armature: 0.0,
             damping: 0.0,
             friction: 0.0,
+            spring_stiffness: 0.0,
+            spring_ref: 0.0,
             effort_limit: None,
             velocity_limit: None,
         }
@@ -459,6 +468,27 @@ impl ArticulationModel {
                     return Err(invalid(format!(
                         "joint `{}` limits [{lo}, {hi}] are not an interval",
                         j.name
+                    )));
+                }
+                let numbers = [
+                    ("armature", j.armature),
+                    ("damping", j.damping),
+                    ("friction", j.friction),
+                    ("spring_stiffness", j.spring_stiffness),
+                ];
+                if let Some((field, v)) = numbers
+                    .into_iter()
+                    .find(|(_, v)| !(v.is_finite() && *v >= 0.0))
+                {
+                    return Err(invalid(format!(
+                        "joint `{}` {field} {v} must be finite and >= 0",
+                        j.name
+                    )));
+                }
+                if !j.spring_ref.is_finite() {
+                    return Err(invalid(format!(
+                        "joint `{}` spring_ref {} must be finite",
+                        j.name, j.spring_ref
                     )));
                 }
             }

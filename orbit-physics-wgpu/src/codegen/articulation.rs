@@ -431,8 +431,11 @@ impl Gen<'_> {
                 neg_lim: f(-dof.effort_limit),
                 dd_damp: f(dof.drive_damping + dof.damping),
                 damp: f(dof.damping),
+                spring: f(dof.spring),
+                spring_ref: f(dof.spring_ref),
                 driven: dof.stiffness > 0.0 || dof.drive_damping > 0.0,
                 damped: dof.damping != 0.0,
+                sprung: dof.spring != 0.0,
             };
             self.open("");
             self.drive_lines(&d.to_string(), &format!("amat[{}]", d * nd + d), &terms);

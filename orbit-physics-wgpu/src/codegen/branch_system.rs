@@ -56,10 +56,13 @@ impl Gen<'_> {
                 neg_lim: lane(&|d| -d.effort_limit),
                 dd_damp: lane(&|d| d.drive_damping + d.damping),
                 damp: lane(&|d| d.damping),
+                spring: lane(&|d| d.spring),
+                spring_ref: lane(&|d| d.spring_ref),
                 driven: self.any_dof(br, j, |d| {
                     dofs[d].stiffness > 0.0 || dofs[d].drive_damping > 0.0
                 }),
                 damped: self.any_dof(br, j, |d| dofs[d].damping != 0.0),
+                sprung: self.any_dof(br, j, |d| dofs[d].spring != 0.0),
             };
             self.open("");
             self.drive_lines(&j.to_string(), &format!("abb[{}]", j * n + j), &terms);

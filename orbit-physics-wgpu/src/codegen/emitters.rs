@@ -140,8 +140,13 @@ impl Gen<'_> {
                 self.line(format!("{diag} = {diag} + DT * {damp};"));
             }
         }
+        let spring = if t.sprung {
+            format!(" - {} * (q[{i}] - {})", t.spring, t.spring_ref)
+        } else {
+            String::new()
+        };
         self.line(format!(
-            "dv[{i}] = DT * (tau - {damp} * qd[{i}] - bias[{i}]);"
+            "dv[{i}] = DT * (tau - {damp} * qd[{i}]{spring} - bias[{i}]);"
         ));
     }
 }
@@ -155,8 +160,12 @@ pub(super) struct DriveTerms {
     pub neg_lim: String,
     pub dd_damp: String,
     pub damp: String,
+    /// Passive spring stiffness and rest position.
+    pub spring: String,
+    pub spring_ref: String,
     pub driven: bool,
     pub damped: bool,
+    pub sprung: bool,
 }
 
 /// An unrolled Cholesky factorisation `A = L Lᵀ` in place of the lower triangle in the WGSL

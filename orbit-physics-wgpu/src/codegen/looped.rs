@@ -133,7 +133,7 @@ impl Gen<'_> {
     }
 
     /// Per dof: its link and root axis, its articulation's stride in the state buffer, its
-    /// drive, damping, armature and limits.
+    /// drive, damping, armature, limits and spring.
     fn dof_tables(&mut self) {
         let s = self.scene;
         let nd = s.dofs.len();
@@ -149,13 +149,15 @@ impl Gen<'_> {
         self.table("dof_axis", "i32", "ND1", axis, "-1");
         let stride = col(&|d| format!("{}u", self.block(d).joint_dofs()));
         self.table("dof_stride", "u32", "ND1", stride, "0u");
-        let fields: [(&str, DofField); 6] = [
+        let fields: [(&str, DofField); 8] = [
             ("dof_stiffness", |x| x.stiffness),
             ("dof_drive_damping", |x| x.drive_damping),
             ("dof_effort_limit", |x| x.effort_limit),
             ("dof_damping", |x| x.damping),
             ("dof_armature", |x| x.armature),
             ("dof_velocity_limit", |x| x.velocity_limit),
+            ("dof_spring", |x| x.spring),
+            ("dof_spring_ref", |x| x.spring_ref),
         ];
         for (name, get) in fields {
             let values = col(&|d| f(get(&dofs[d])));

@@ -227,7 +227,8 @@ fn drives() {
             applied[d] = tau;
             amat[diag] = amat[diag] + DT * damp;
         }
-        dv[d] = DT * (tau - damp * qd[d] - bias[d]);
+        let spring = dof_spring[d] * (q[d] - dof_spring_ref[d]);
+        dv[d] = DT * (tau - damp * qd[d] - spring - bias[d]);
     }
     cholesky();
     chol_solve(&dv);
