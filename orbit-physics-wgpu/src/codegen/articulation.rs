@@ -9,9 +9,14 @@ use super::emitters::{DenseCholesky, DriveTerms};
 use super::{Gen, f, m3, q4, v3};
 use crate::compile::FreeRoot;
 
-/// Up to this many dofs the system matrix is factorised by unrolled straight-line code (the
-/// fastest kernel); beyond, by loops over the tree of dofs.
+/// Up to this many dofs a serial chain's system matrix is factorised by an unrolled dense
+/// Cholesky.
 const UNROLLED_DOFS: usize = 16;
+
+/// Up to this many multiply-adds the factorisation along the tree of dofs is unrolled (the
+/// Humanoid's 27 dofs take 1 170); beyond, it loops. Unrolled, the solve with every constraint
+/// row keeps its vector in registers, where a loop indexes it at run time.
+const UNROLLED_TREE_TERMS: usize = 2000;
 
 /// How the kernel factorises the system matrix A.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,7 +28,7 @@ enum Factorisation {
     /// a dense factorisation would fill in the zeros between branches (the Ant's legs), and
     /// along the tree it fills in nothing.
     UnrolledTree,
-    /// The same along the tree, as loops: beyond [`UNROLLED_DOFS`] dofs.
+    /// The same along the tree, as loops: beyond [`UNROLLED_TREE_TERMS`] multiply-adds.
     Looped,
 }
 
@@ -242,16 +247,40 @@ impl Gen<'_> {
 
     /// How the system matrix is factorised: see [`Factorisation`].
     fn factorisation(&self) -> Factorisation {
-        if self.nd() > UNROLLED_DOFS {
-            return Factorisation::Looped;
-        }
         let parents = self.dof_parents();
         let chains = (0..self.nd()).all(|d| parents[d] < 0 || parents[d] as usize == d - 1);
-        if chains {
+        if chains && self.nd() <= UNROLLED_DOFS {
             Factorisation::Dense
-        } else {
+        } else if self.tree_factor_terms() <= UNROLLED_TREE_TERMS {
             Factorisation::UnrolledTree
+        } else {
+            Factorisation::Looped
         }
+    }
+
+    /// The multiply-adds of the factorisation along the tree of dofs: for each dof, for each
+    /// ancestor, that ancestor's chain.
+    pub(super) fn tree_factor_terms(&self) -> usize {
+        let parents = self.dof_parents();
+        let depth = |mut d: i32| {
+            let mut n = 0;
+            while d >= 0 {
+                n += 1;
+                d = parents[d as usize];
+            }
+            n
+        };
+        (0..self.nd())
+            .map(|k| {
+                let mut terms = 0;
+                let mut i = parents[k];
+                while i >= 0 {
+                    terms += depth(i);
+                    i = parents[i as usize];
+                }
+                terms
+            })
+            .sum()
     }
 
     /// In-place factorisation of the system matrix and the solve A x = b with it, in the form
@@ -358,11 +387,8 @@ impl Gen<'_> {
         parents
     }
 
-    /// Featherstone's factorisation A = Lᵀ D L of a tree's system matrix, whose entries join
-    /// only a dof and its ancestors: it fills nothing in, and loops keep the kernel small for
-    /// many dofs (an unrolled dense Cholesky grows as n³ and the shader compilers slow down
-    /// with it).
-    pub(super) fn tree_factorisation(&mut self) {
+    /// Each dof's parent as a private table `dof_parent` (the looped passes walk it).
+    pub(super) fn dof_parent_table(&mut self) {
         let parents: Vec<String> = self.dof_parents().iter().map(|p| p.to_string()).collect();
         self.line("// Each dof's parent in its articulation's tree of dofs (-1: none).");
         self.line(format!(
@@ -370,6 +396,13 @@ impl Gen<'_> {
             parents.join(", ")
         ));
         self.line("");
+    }
+
+    /// Featherstone's factorisation A = Lᵀ D L of a tree's system matrix, whose entries join
+    /// only a dof and its ancestors, as loops over `dof_parent`: it fills nothing in, and the
+    /// loops keep the kernel small where the unrolled form would not be (the shader compilers
+    /// slow down faster than a kernel grows).
+    fn tree_factorisation(&mut self) {
         self.line("// In-place factorisation A = Lᵀ D L along the tree of dofs (D on the diagonal, L below it).");
         self.open("fn cholesky()");
         self.open("for (var k = i32(ND) - 1; k >= 0; k = k - 1)");

@@ -28,7 +28,8 @@ impl Gen<'_> {
         let root_links: Vec<String> = roots.iter().map(|l| format!("{l}u")).collect();
         self.table("root_link", "u32", "NR1", root_links, "0u");
         self.line("");
-        self.tree_factorisation();
+        self.dof_parent_table();
+        self.cholesky();
         self.arm_rows();
         self.open("fn load_objects()");
         self.load_object_lines();
