@@ -28,6 +28,34 @@ const SIMULATED_VALUES: &[(&str, &str)] = &[
     ("gap", "0"),
     ("priority", "0"),
 ];
+/// The attributes of `<option><flag>`.
+const FLAGS: &[&str] = &[
+    "constraint",
+    "equality",
+    "frictionloss",
+    "limit",
+    "contact",
+    "spring",
+    "damper",
+    "gravity",
+    "clampctrl",
+    "warmstart",
+    "filterparent",
+    "actuation",
+    "refsafe",
+    "sensor",
+    "midphase",
+    "eulerdamp",
+    "autoreset",
+    "nativeccd",
+    "island",
+    "override",
+    "energy",
+    "fwdinv",
+    "invdiscrete",
+    "multiccd",
+    "sleep",
+];
 /// Attributes that only draw or label: MuJoCo's rendering groups, colours and user data.
 const VISUAL: &[&str] = &["rgba", "material", "group", "user"];
 
@@ -47,6 +75,8 @@ fn schema(element: &str) -> Option<Schema> {
         "option" => s(false, &["timestep"], &[],
             &["integrator", "iterations", "ls_iterations", "solver", "tolerance", "cone",
               "impratio", "jacobian", "noslip_iterations", "gravity"]),
+        // MuJoCo's simulation flags; the engines run with their own (MuJoCo's defaults).
+        "flag" => s(false, &[], &[], FLAGS),
         "body" => s(true, &["name", "childclass"], &["user"], &[]),
         "joint" => s(false,
             &["name", "type", "pos", "axis", "limited", "range", "stiffness", "springref",
@@ -146,7 +176,22 @@ pub(crate) fn check_document(root: &Element, file: &str) -> Result<Unsimulated, 
     check(file, root, "mujoco", &mut unsimulated)?;
     for section in &root.children {
         match section.name.as_str() {
-            "compiler" | "option" => check(file, section, &section.name, &mut unsimulated)?,
+            "compiler" => check(file, section, &section.name, &mut unsimulated)?,
+            "option" => {
+                check(file, section, "option", &mut unsimulated)?;
+                for child in &section.children {
+                    if child.name != "flag" {
+                        return Err(mjcf_error(
+                            file,
+                            child.line,
+                            &child.name,
+                            None,
+                            "not supported in `<option>`; the importer takes `<flag>`".into(),
+                        ));
+                    }
+                    check(file, child, "flag", &mut unsimulated)?;
+                }
+            }
             "worldbody" | "default" => check_tree(file, section, &mut unsimulated)?,
             "actuator" | "contact" => {
                 for element in &section.children {
@@ -197,5 +242,29 @@ mod tests {
         assert_eq!(warned[0].0, &("geom".to_string(), "margin".to_string()));
         assert_eq!(warned[0].1, &vec![7]);
         assert!(check("a.xml", &geom(&[("densty", "3")]), "geom", &mut unsimulated).is_err());
+    }
+
+    /// `<option>`'s flags are warned (the engines keep their own), an unknown flag or another
+    /// child of `<option>` is an error with its line.
+    #[test]
+    fn option_flags_are_warned_and_other_children_refused() {
+        let doc = |option: &str| {
+            let text = format!(
+                "<mujoco>\n<option timestep=\"0.005\">\n{option}\n</option>\n<worldbody/>\n</mujoco>"
+            );
+            check_document(&super::super::xml::parse(&text, "o.xml").unwrap(), "o.xml")
+        };
+        let warned = doc("<flag eulerdamp=\"disable\"/>").unwrap();
+        let warned: Vec<_> = warned.0.iter().collect();
+        assert_eq!(warned.len(), 1);
+        assert_eq!(warned[0].0, &("flag".to_string(), "eulerdamp".to_string()));
+        assert_eq!(warned[0].1, &vec![3]);
+        let e = doc("<flag eulrdamp=\"disable\"/>").unwrap_err().to_string();
+        assert!(e.contains("o.xml:3: <flag> attribute `eulrdamp`"), "{e}");
+        let e = doc("<gravity/>").unwrap_err().to_string();
+        assert!(
+            e.contains("o.xml:3: <gravity>: not supported in `<option>`"),
+            "{e}"
+        );
     }
 }
