@@ -23,6 +23,11 @@ Models (`--models` picks some by key):
 - `box_pushing`: `scenes/box_pushing.ron` at 2 ms steps; MuJoCo Warp is not run (Fancy Gym's
   model needs its meshes, which this repository does not carry).
 
+`--mjcf FILE` (repeatable) adds a model of one's own, run like `mjw_humanoid`: a copy with the
+contact settings both engines simulate, the file's timestep, the first keyframe as the start
+(if it has none, MuJoCo's reference configuration with each joint moved into its range, added
+to the copy as a keyframe), a floating base if its top-level body has a free joint.
+
 Usage, from the workspace root, on a machine with an NVIDIA GPU, a Vulkan driver and
 `pip install mujoco-warp`:
 
@@ -39,6 +44,8 @@ import re
 import subprocess
 import sys
 import tempfile
+
+import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
@@ -63,31 +70,47 @@ def same_contacts(source, target):
         joint.solref_limit = [0.02, 1.0]
         joint.solimp_limit = [0.9, 0.95, 0.001, 0.5, 2.0]
     spec.option.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP)
-    spec.compile()
+    model = spec.compile()
+    if model.nkey == 0:
+        # Both engines start from the reference configuration, each joint moved into its range
+        # (orbit-rs refuses a start outside the limits, MuJoCo would push it back in).
+        qpos = model.qpos0.copy()
+        for j in range(model.njnt):
+            if model.jnt_limited[j] and model.jnt_type[j] in (2, 3):  # slide, hinge
+                lo, hi = model.jnt_range[j]
+                a = model.jnt_qposadr[j]
+                qpos[a] = min(max(qpos[a], lo), hi)
+        key = spec.add_key()
+        key.name = "start"
+        key.qpos = qpos.tolist()
+        spec.compile()
     target.write_text(spec.to_xml())
 
 
 def keyframe_scene(mjcf, target):
-    """An orbit-rs scene of `mjcf`'s robot on the ground plane, from the file's first keyframe."""
+    """An orbit-rs scene of `mjcf`'s robot on the ground plane, from the file's first keyframe
+    (its reference configuration if it has none)."""
     import mujoco
 
     model = mujoco.MjModel.from_xml_path(str(mjcf))
-    qpos = model.key_qpos[0]
+    qpos = model.key_qpos[0] if model.nkey > 0 else model.qpos0
+    floating = model.njnt > 0 and int(model.jnt_type[0]) == int(mujoco.mjtJoint.mjJNT_FREE)
     joints = {}
     moving = {int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)}
     for j in range(model.njnt):
         if int(model.jnt_type[j]) in moving:
             joints[model.joint(j).name] = float(qpos[model.jnt_qposadr[j]])
     joint_pos = ", ".join(f'"{name}": {q!r}' for name, q in joints.items())
-    pos = ", ".join(repr(float(x)) for x in qpos[:3])
-    rot = ", ".join(repr(float(x)) for x in qpos[3:7])
+    root = qpos[:7] if floating else np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
+    pos = ", ".join(repr(float(x)) for x in root[:3])
+    rot = ", ".join(repr(float(x)) for x in root[3:7])
     target.write_text(
         f"""(
     env_spacing: 5.0,
     articulations: {{"robot": (
         spawn: Mjcf(path: "{mjcf}"),
         init_state: (pos: ({pos}), rot: ({rot}), joint_pos: {{{joint_pos}}}),
-        fixed_base: false,
+        fixed_base: {str(not floating).lower()},
         self_collisions: true,
     )}},
     static_objects: {{"ground": (asset: "ground_plane")}},
@@ -146,6 +169,8 @@ def main():
     parser.add_argument("--steps", type=int, default=1000)
     parser.add_argument("--effort", type=float, default=1.5)
     parser.add_argument("--models", default="ant,humanoid,mjw_humanoid,box_pushing")
+    parser.add_argument("--mjcf", action="append", default=[],
+                        help="an MJCF file of one's own to add (repeatable)")
     parser.add_argument("--out", help="also write the table to this file")
     args = parser.parse_args()
     work = pathlib.Path(tempfile.mkdtemp(prefix="physics_table_"))
@@ -164,9 +189,20 @@ def main():
         keyframe_scene(mjcf, work / "humanoid.ron")
         models["mjw_humanoid"] = ("MuJoCo Warp's test humanoid", work / "humanoid.ron", mjcf,
                                   0.005, 128)
+    keys = [k for k in args.models.split(",") if k]
+    for i, path in enumerate(args.mjcf):
+        source = pathlib.Path(path).resolve()
+        mjcf = work / f"model{i}.xml"
+        same_contacts(source, mjcf)
+        keyframe_scene(mjcf, work / f"model{i}.ron")
+        import mujoco
+
+        dt = float(mujoco.MjModel.from_xml_path(str(mjcf)).opt.timestep)
+        models[source.name] = (source.name, work / f"model{i}.ron", mjcf, dt, 128)
+        keys.append(source.name)
     rows = ["| model | envs | orbit-rs steps/s | kernel ms / step | MuJoCo Warp steps/s | ratio |",
             "|---|---:|---:|---:|---:|---:|"]
-    for key in args.models.split(","):
+    for key in keys:
         label, scene, mjcf, dt, njmax = models[key]
         for envs in (int(e) for e in args.envs.split(",")):
             ours, kernel = orbit_rs(args, scene, dt, envs)
