@@ -17,8 +17,9 @@ Models (`--models` picks some by key):
 - `mjw_humanoid`: MuJoCo Warp's test humanoid (`test_data/humanoid/humanoid.xml` of the
   installed package) at its own 5 ms step, both engines on one copy of the file whose contact
   settings are the ones both simulate: every geom's `condim` 3 (the file has 1 on the body's
-  geoms), MuJoCo's default `solref`/`solimp` on geoms and joint limits (the file sets its own),
-  and Euler damping implicit (the file disables it). orbit-rs starts from the file's first
+  geoms) and no `margin` or `gap`, MuJoCo's default `solref`/`solimp` on geoms and joint
+  limits (the file sets its own), the Euler integrator with its damping implicit (the file
+  disables that). orbit-rs starts from the file's first
   keyframe, as `testspeed` does.
 - `box_pushing`: `scenes/box_pushing.ron` at 2 ms steps; MuJoCo Warp is not run (Fancy Gym's
   model needs its meshes, which this repository does not carry).
@@ -62,8 +63,11 @@ def same_contacts(source, target):
     import mujoco
 
     spec = mujoco.MjSpec.from_file(str(source))
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
     for geom in spec.geoms:
         geom.condim = 3
+        geom.margin = 0.0
+        geom.gap = 0.0
         geom.solref = [0.02, 1.0]
         geom.solimp = [0.9, 0.95, 0.001, 0.5, 2.0]
     for joint in spec.joints:
