@@ -258,29 +258,30 @@ impl Gen<'_> {
         }
     }
 
-    /// The multiply-adds of the factorisation along the tree of dofs: for each dof, for each
-    /// ancestor, that ancestor's chain.
+    /// The multiply-adds of the factorisation along the tree of dofs, as
+    /// [`Gen::unrolled_tree_factorisation`] writes them: for each dof, for each ancestor, that
+    /// ancestor and its own ancestors.
     pub(super) fn tree_factor_terms(&self) -> usize {
-        let parents = self.dof_parents();
-        let depth = |mut d: i32| {
-            let mut n = 0;
-            while d >= 0 {
-                n += 1;
-                d = parents[d as usize];
-            }
-            n
-        };
-        (0..self.nd())
-            .map(|k| {
-                let mut terms = 0;
-                let mut i = parents[k];
-                while i >= 0 {
-                    terms += depth(i);
-                    i = parents[i as usize];
-                }
-                terms
-            })
+        let ancestors = self.dof_ancestors();
+        (ancestors.iter().flatten())
+            .map(|&i| 1 + ancestors[i].len())
             .sum()
+    }
+
+    /// Each dof's ancestors in its articulation's tree of dofs, nearest first.
+    fn dof_ancestors(&self) -> Vec<Vec<usize>> {
+        let parents = self.dof_parents();
+        (0..self.nd())
+            .map(|d| {
+                let mut out = vec![];
+                let mut p = parents[d];
+                while p >= 0 {
+                    out.push(p as usize);
+                    p = parents[p as usize];
+                }
+                out
+            })
+            .collect()
     }
 
     /// In-place factorisation of the system matrix and the solve A x = b with it, in the form
@@ -325,16 +326,8 @@ impl Gen<'_> {
     /// straight-line code, each dof's entries updated only along its chain of ancestors.
     fn unrolled_tree_factorisation(&mut self) {
         let nd = self.nd();
-        let parents = self.dof_parents();
-        let ancestors = |d: usize| {
-            let mut out = vec![];
-            let mut p = parents[d];
-            while p >= 0 {
-                out.push(p as usize);
-                p = parents[p as usize];
-            }
-            out
-        };
+        let chains = self.dof_ancestors();
+        let ancestors = |d: usize| chains[d].iter().copied();
         let at = |i: usize, j: usize| format!("amat[{}]", i * nd + j);
         self.line("// In-place factorisation A = Lᵀ D L along the tree of dofs (1/D in linv, L below the diagonal).");
         self.open("fn cholesky()");
