@@ -356,12 +356,18 @@ impl EnvWorld {
                 .assembly_id();
             let mut effort = input.effort(d, &art.out.bias);
             let (mut k, mut q_rest, mut damping) = (0.0, 0.0, art.joint_damping[d]);
-            let q = mb
-                .link(art.dof_mb_link[d])
-                .expect("link exists")
-                .joint()
-                .coords()[art.dof_axis[d]];
-            if drive.stiffness > 0.0 || drive.damping > 0.0 {
+            let (spring, spring_ref) = art.springs[d];
+            let driven = drive.stiffness > 0.0 || drive.damping > 0.0;
+            // The joint position, read only where a drive or a spring needs it.
+            let q = if driven || spring != 0.0 {
+                mb.link(art.dof_mb_link[d])
+                    .expect("link exists")
+                    .joint()
+                    .coords()[art.dof_axis[d]]
+            } else {
+                0.0
+            };
+            if driven {
                 let v = mb.generalized_velocity()[id];
                 let pd = drive.stiffness * (input.pos_target[d] - q)
                     + drive.damping * (input.vel_target[d] - v);
@@ -374,7 +380,6 @@ impl EnvWorld {
                 }
             }
             // A passive spring (MuJoCo's joint `stiffness`) is explicit and no actuator's part.
-            let (spring, spring_ref) = art.springs[d];
             art.effort[d] =
                 effort.clamp(-drive.effort_limit, drive.effort_limit) - spring * (q - spring_ref);
             mb.damping_mut()[id] = damping;
