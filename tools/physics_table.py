@@ -58,6 +58,14 @@ def mjw_file(relative):
     return pathlib.Path(spec.submodule_search_locations[0]) / relative
 
 
+def joint_ids(model):
+    """The ids of `model`'s hinge and slide joints: those orbit-rs gives a dof each."""
+    import mujoco
+
+    moving = {int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)}
+    return [j for j in range(model.njnt) if int(model.jnt_type[j]) in moving]
+
+
 def same_contacts(source, target):
     """Writes `source` with the contact settings both engines simulate (module docstring)."""
     import mujoco
@@ -79,8 +87,8 @@ def same_contacts(source, target):
         # Both engines start from the reference configuration, each joint moved into its range
         # (orbit-rs refuses a start outside the limits, MuJoCo would push it back in).
         qpos = model.qpos0.copy()
-        for j in range(model.njnt):
-            if model.jnt_limited[j] and model.jnt_type[j] in (2, 3):  # slide, hinge
+        for j in joint_ids(model):
+            if model.jnt_limited[j]:
                 lo, hi = model.jnt_range[j]
                 a = model.jnt_qposadr[j]
                 qpos[a] = min(max(qpos[a], lo), hi)
@@ -99,12 +107,9 @@ def keyframe_scene(mjcf, target):
     model = mujoco.MjModel.from_xml_path(str(mjcf))
     qpos = model.key_qpos[0] if model.nkey > 0 else model.qpos0
     floating = model.njnt > 0 and int(model.jnt_type[0]) == int(mujoco.mjtJoint.mjJNT_FREE)
-    joints = {}
-    moving = {int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)}
-    for j in range(model.njnt):
-        if int(model.jnt_type[j]) in moving:
-            joints[model.joint(j).name] = float(qpos[model.jnt_qposadr[j]])
-    joint_pos = ", ".join(f'"{name}": {q!r}' for name, q in joints.items())
+    joint_pos = ", ".join(
+        f'"{model.joint(j).name}": {float(qpos[model.jnt_qposadr[j]])!r}' for j in joint_ids(model)
+    )
     root = qpos[:7] if floating else np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
     pos = ", ".join(repr(float(x)) for x in root[:3])
     rot = ", ".join(repr(float(x)) for x in root[3:7])

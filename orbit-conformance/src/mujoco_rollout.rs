@@ -7,12 +7,10 @@ use std::path::Path;
 use glam::{Quat, Vec3};
 use orbit_core::math::Pose;
 use orbit_core::physics::PhysicsBackend;
-use orbit_core::scene::{SceneCfg, SceneDesc};
+use orbit_core::scene::{ArticulationCfg, SceneCfg, SceneDesc};
 use serde::Deserialize;
 
-use orbit_core::scene::AssetSource;
-
-use crate::scenes::{build, floating_ant, ground, resolve};
+use crate::scenes::{build, floating_ant, floating_mjcf, ground, resolve};
 
 #[derive(Deserialize)]
 struct Initial {
@@ -93,20 +91,18 @@ pub fn ant_mujoco_rollout(backend: &str) -> FreeFallAgreement {
 
 /// Replays an Ant rollout `data` on the bundled Ant over the ground plane.
 fn replay_ant(name: &str, backend: &str, data: &str) -> FreeFallAgreement {
-    let cfg = SceneCfg {
-        env_spacing: 3.0,
-        articulations: vec![floating_ant()],
+    let scene = on_ground(floating_ant(), 3.0);
+    replay(name, backend, scene, data, Vec3::ZERO, GainsIn::Drives)
+}
+
+/// `robot` alone on the ground plane.
+fn on_ground(robot: ArticulationCfg, env_spacing: f32) -> SceneDesc {
+    resolve(&SceneCfg {
+        env_spacing,
+        articulations: vec![robot],
         rigid_objects: vec![],
         static_objects: vec![ground(1.0)],
-    };
-    replay(
-        name,
-        backend,
-        resolve(&cfg),
-        data,
-        Vec3::ZERO,
-        GainsIn::Drives,
-    )
+    })
 }
 
 /// Replays MuJoCo's rollout of the Ant standing on the ground (joint armature 1, large against
@@ -142,23 +138,14 @@ pub fn humanoid_mujoco_rollout(backend: &str, offset: Vec3) -> FreeFallAgreement
 /// returns the agreement.
 pub fn humanoid_springs_mujoco_rollout(backend: &str) -> FreeFallAgreement {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/humanoid_standing.xml");
-    let mut robot = floating_ant();
-    robot.name = "humanoid".into();
-    robot.spawn = AssetSource::Mjcf {
-        path: file.display().to_string(),
-    };
+    let mut robot = floating_mjcf("humanoid", &file.display().to_string());
     robot.self_collisions = true;
-    let cfg = SceneCfg {
-        env_spacing: 5.0,
-        articulations: vec![robot],
-        rigid_objects: vec![],
-        static_objects: vec![ground(1.0)],
-    };
+    let scene = on_ground(robot, 5.0);
     let data = include_str!("../data/mujoco_humanoid_rollout.json");
     replay(
         "humanoid_springs",
         backend,
-        resolve(&cfg),
+        scene,
         data,
         Vec3::ZERO,
         GainsIn::Joints,

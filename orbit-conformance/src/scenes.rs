@@ -239,15 +239,19 @@ pub fn ground(friction: f32) -> StaticObjectCfg {
 /// The bundled Ant (`ant.xml`) as a floating base without actuators (its joints take efforts),
 /// starting at the origin.
 pub fn floating_ant() -> ArticulationCfg {
-    let mut ant = passive_articulation(ArticulationModel {
-        name: "ant".into(),
+    floating_mjcf("ant", "ant.xml")
+}
+
+/// The MJCF model at `path` (a bundled name or a file) as a floating base named `name`, without
+/// actuators (its joints take efforts), starting at the origin.
+pub fn floating_mjcf(name: &str, path: &str) -> ArticulationCfg {
+    let mut robot = passive_articulation(ArticulationModel {
+        name: name.into(),
         links: vec![],
     });
-    ant.spawn = AssetSource::Mjcf {
-        path: "ant.xml".into(),
-    };
-    ant.fixed_base = false;
-    ant
+    robot.spawn = AssetSource::Mjcf { path: path.into() };
+    robot.fixed_base = false;
+    robot
 }
 
 /// The bundled Ant (`ant.xml`) as a floating base at `height`, its joints starting at

@@ -3,11 +3,10 @@
 //! `zaxis`), `<inertial>` or inertia from the geoms (`<compiler inertiafromgeom>`, density or
 //! `mass`), `hinge` and `slide` joints (range, limits, armature, damping, frictionloss, passive
 //! springs `stiffness` with `springref`; several in one body become a chain of massless links,
-//! composed in file order as MuJoCo does) or a
-//! `free` joint on the top-level body (a floating base), geoms (`sphere`,
-//! `capsule`, `box`, `cylinder`, with `fromto`; `plane` in the world body), `<default>`
-//! classes with `class`/`childclass`, `contype`/`conaffinity`, sites, `<motor>` actuators (and plain `<general>` ones) and
-//! `<contact><exclude>`. Angles are in degrees unless `<compiler angle="radian">`.
+//! composed in file order as MuJoCo does) or a `free` joint on the top-level body (a floating
+//! base), geoms (`sphere`, `capsule`, `box`, `cylinder`, with `fromto`; `plane` in the world
+//! body), `<default>` classes with `class`/`childclass`, `contype`/`conaffinity`, sites,
+//! `<motor>` actuators (and plain `<general>` ones) and `<contact><exclude>`. Angles are in degrees unless `<compiler angle="radian">`.
 //!
 //! A body's joint may sit away from the body's origin (`<joint pos>`); the importer puts the
 //! link frame at the joint, with the body's orientation, and expresses the body's geoms, mass
