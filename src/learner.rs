@@ -1,16 +1,29 @@
 //! The learner's burn device: the CPU (flex), or burn's wgpu backend on the Vulkan device the
 //! wgpu physics backend uses (one device per process, so physics and learner share a queue and
-//! its memory).
+//! its memory). The fused GPU update runs on that Vulkan device too, with burn's copy of the
+//! network on the CPU.
 
 use orbit_rl::burn::tensor::Device;
-use orbit_rl::{LearnerDevice, RlError};
+use orbit_rl::{GpuUpdate, LearnerDevice, RlError, RunnerCfg};
 
-/// The burn device for `kind`. A GPU device is registered with burn once per process; later
-/// calls return the same device.
-pub fn learner_device(kind: LearnerDevice) -> Result<Device, RlError> {
-    match kind {
-        LearnerDevice::Cpu => Ok(Device::flex()),
-        LearnerDevice::Gpu => gpu_device(),
+/// The burn device for `cfg`'s learner, one of `ranks` data-parallel replicas. A GPU device
+/// is registered once per process; later calls return the same device.
+pub fn learner_device(cfg: &RunnerCfg, ranks: usize) -> Result<Device, RlError> {
+    match (cfg.device, cfg.gpu_update) {
+        (LearnerDevice::Cpu, _) => Ok(Device::flex()),
+        (LearnerDevice::Gpu, GpuUpdate::Fused) if ranks > 1 => Err(RlError::Device(
+            "data-parallel training averages gradients on the host after every minibatch, \
+             which the fused GPU update does not: set `gpu_update: Burn` (a build with \
+             `--features gpu-learner`) or train on one rank"
+                .into(),
+        )),
+        (LearnerDevice::Gpu, GpuUpdate::Fused) => {
+            let gpu = orbit_physics_wgpu::gpu().map_err(RlError::Device)?;
+            orbit_rl::share_wgpu_device(gpu.device.clone(), gpu.queue.clone());
+            tracing::info!(adapter = %gpu.info.name, "fused PPO update on the physics' Vulkan device");
+            Ok(Device::flex())
+        }
+        (LearnerDevice::Gpu, GpuUpdate::Burn) => gpu_device(),
     }
 }
 
@@ -45,8 +58,8 @@ fn gpu_device() -> Result<Device, RlError> {
 #[cfg(not(feature = "gpu-learner"))]
 fn gpu_device() -> Result<Device, RlError> {
     Err(RlError::Device(
-        "this build has no GPU learner: build with `--features gpu-learner` (adds burn's wgpu \
-         backend), or set `device: Cpu` in the agent config"
+        "this build has no burn GPU learner: build with `--features gpu-learner` (adds burn's \
+         wgpu backend), or set `gpu_update: Fused` or `device: Cpu` in the agent config"
             .into(),
     ))
 }

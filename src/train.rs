@@ -442,7 +442,7 @@ fn train_rank(
         dir.as_deref(),
         resume_from.as_deref(),
         show_progress,
-        share,
+        (share, rank.map_or(1, |r| r.world_size())),
     ) {
         Ok(runner) => runner,
         Err(e) => {
@@ -486,7 +486,8 @@ type Runner = OnPolicyRunner<Box<dyn VecEnv>>;
 
 /// Writes the run's `params/`, builds its env and a runner logging into `dir` (none: a rank
 /// of a data-parallel run that does not log), and loads the checkpoint to resume from; with
-/// it, the learner's warm-up, which may still be running.
+/// it, the learner's warm-up, which may still be running. `share`: the thread ranks the envs
+/// are shared out to; `replicas`: the ranks of the run.
 fn start_runner(
     args: &TrainArgs,
     run: &ResolvedRun,
@@ -494,7 +495,7 @@ fn start_runner(
     dir: Option<&Path>,
     resume_from: Option<&Path>,
     show_progress: bool,
-    share: usize,
+    (share, replicas): (usize, usize),
 ) -> Result<(Runner, warm_up::WarmUp), Box<dyn std::error::Error>> {
     if let Some(dir) = dir {
         write_params(dir, run, env_doc)?;
@@ -509,7 +510,7 @@ fn start_runner(
     }
     let build_start = std::time::Instant::now();
     let cfg = run.agent.clone();
-    let device = crate::learner::learner_device(cfg.device)?;
+    let device = crate::learner::learner_device(&cfg, replicas)?;
     // A single-process GPU learner compiles its kernels while the env builds its physics
     // kernel on a GPU. Where the physics runs on the CPU (rapier, or the kernel on a CPU
     // adapter) the two would share the CPU's cores, and the warm-up's iteration only adds
@@ -518,7 +519,10 @@ fn start_runner(
         .and_then(|n| orbit_core::config::from_node::<usize>(n).ok());
     let warm_up = match num_envs {
         Some(n)
-            if share == 1 && cfg.device == orbit_rl::LearnerDevice::Gpu && !run.physics_on_cpu =>
+            if share == 1
+                && cfg.device == orbit_rl::LearnerDevice::Gpu
+                && cfg.gpu_update == orbit_rl::GpuUpdate::Burn
+                && !run.physics_on_cpu =>
         {
             warm_up::WarmUp::spawn(run, n, cfg.clone(), device.clone())
         }

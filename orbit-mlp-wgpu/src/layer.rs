@@ -1,12 +1,10 @@
 //! [`StackedMlp`]: networks of equal widths, evaluated layer by layer with one dispatch per layer
 //! for all of them.
 
-use std::sync::mpsc;
-
 use crate::MlpError;
 
 /// The layer kernel (a tiled product with the bias and activation fused).
-const LAYER_SOURCE: &str = include_str!("layer.wgsl");
+const LAYER_SOURCE: &str = concat!(include_str!("activation.wgsl"), include_str!("layer.wgsl"));
 
 /// Rows and columns of the output tile one workgroup computes (see `layer.wgsl`).
 const TILE: usize = 64;
@@ -30,7 +28,7 @@ pub enum Activation {
 
 impl Activation {
     /// The kernel's code for it (0 is no activation).
-    fn code(self) -> u32 {
+    pub(crate) fn code(self) -> u32 {
         match self {
             Activation::Elu => 1,
             Activation::Selu => 2,
@@ -325,29 +323,13 @@ impl StackedMlp {
         let bytes = (4 * outputs) as u64;
         encoder.copy_buffer_to_buffer(&self.output, 0, &self.readback, 0, bytes);
         let submission = self.queue.submit([encoder.finish()]);
-        let slice = self.readback.slice(..bytes);
-        let (sender, receiver) = mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = sender.send(r);
-        });
-        self.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(submission),
-                timeout: None,
-            })
-            .map_err(|e| MlpError::Device(format!("waiting for the forward pass: {e}")))?;
-        receiver
-            .recv()
-            .map_err(|e| MlpError::Device(format!("the readback was dropped: {e}")))?
-            .map_err(|e| MlpError::Device(format!("reading the outputs back: {e}")))?;
-        {
-            let view = slice
-                .get_mapped_range()
-                .map_err(|e| MlpError::Device(format!("reading the outputs back: {e}")))?;
-            out.copy_from_slice(bytemuck::cast_slice(&view));
-        }
-        self.readback.unmap();
-        Ok(())
+        crate::readback::read_mapped(
+            &self.device,
+            submission,
+            (&self.readback, bytes),
+            "forward pass",
+            |values| out.copy_from_slice(values),
+        )
     }
 }
 

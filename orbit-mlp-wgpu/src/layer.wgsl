@@ -28,24 +28,6 @@ const SLICE: u32 = 16u;
 var<workgroup> xs: array<f32, 1024>;
 var<workgroup> ws: array<f32, 1024>;
 
-// 0 none, 1 ELU, 2 SELU, 3 ReLU, 4 leaky ReLU (0.01), 5 tanh, 6 sigmoid. The exponentials
-// take min(v, 0) so that a large positive pre-activation never overflows.
-fn activate(v: f32, kind: u32) -> f32 {
-    switch kind {
-        case 1u: { return select(exp(min(v, 0.0)) - 1.0, v, v > 0.0); }
-        case 2u: {
-            let scale = 1.0507009873554805;
-            let alpha = 1.6732632423543772;
-            return scale * select(alpha * (exp(min(v, 0.0)) - 1.0), v, v > 0.0);
-        }
-        case 3u: { return max(v, 0.0); }
-        case 4u: { return select(0.01 * v, v, v > 0.0); }
-        case 5u: { return tanh(v); }
-        case 6u: { return 1.0 / (1.0 + exp(-v)); }
-        default: { return v; }
-    }
-}
-
 // Writes row `r`'s four columns `col0 + lid.x + 16 j` of stack `z`.
 fn store(z: u32, r: u32, c0: u32, a: vec4<f32>) {
     if r >= p.rows {

@@ -14,10 +14,13 @@
 mod device;
 mod error;
 mod layer;
+mod readback;
+mod train;
 
 pub use device::{share_device, shared_device};
 pub use error::MlpError;
 pub use layer::{Activation, StackedMlp};
+pub use train::{PpoSettings, PpoShape, PpoTrainer, UpdateInputs, UpdateOutcome};
 
 /// The wgpu crate this one is built on, for callers that hand it their device.
 pub use wgpu;

@@ -129,6 +129,89 @@ impl Adam {
         module.map(&mut step)
     }
 
+    /// The first and second moments of `module`'s parameters, flattened in visit order
+    /// (zeros before the first step).
+    pub fn flat_moments<M: Module>(&self, module: &M) -> (Vec<f32>, Vec<f32>) {
+        struct Flatten<'a> {
+            moments: &'a [Moments],
+            index: usize,
+            first: Vec<f32>,
+            second: Vec<f32>,
+        }
+        impl ModuleVisitor for Flatten<'_> {
+            fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+                let n = param.shape().num_elements();
+                match self.moments.get(self.index) {
+                    Some(m) => {
+                        let values = |t: &BridgeTensor| -> Vec<f32> {
+                            crate::ppo::values(Tensor::<D>::from_bridge(t.clone()))
+                        };
+                        self.first.extend(values(&m.first));
+                        self.second.extend(values(&m.second));
+                    }
+                    None => {
+                        self.first.extend(std::iter::repeat_n(0.0, n));
+                        self.second.extend(std::iter::repeat_n(0.0, n));
+                    }
+                }
+                self.index += 1;
+            }
+        }
+        let mut flat = Flatten {
+            moments: &self.moments,
+            index: 0,
+            first: Vec::new(),
+            second: Vec::new(),
+        };
+        module.visit(&mut flat);
+        (flat.first, flat.second)
+    }
+
+    /// Replaces the moments by `first` and `second` (flattened in `module`'s visit order, as
+    /// [`flat_moments`](Self::flat_moments) gives them), the step count by `steps` and the
+    /// learning rate by `learning_rate`.
+    pub fn set_flat_state<M: Module>(
+        &mut self,
+        module: &M,
+        (first, second): (&[f32], &[f32]),
+        steps: u32,
+        learning_rate: f64,
+    ) {
+        struct Shape<'a> {
+            first: std::slice::Iter<'a, f32>,
+            second: std::slice::Iter<'a, f32>,
+            device: burn::tensor::Device,
+            moments: Vec<Moments>,
+        }
+        impl ModuleVisitor for Shape<'_> {
+            fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+                let n = param.shape().num_elements();
+                let device = &self.device;
+                let shaped = |values: &mut std::slice::Iter<'_, f32>| {
+                    let v: Vec<f32> = values.by_ref().take(n).copied().collect();
+                    assert_eq!(v.len(), n, "one moment per parameter");
+                    tensor1(v, device)
+                        .inner()
+                        .reshape::<D, _>(param.dims())
+                        .into_bridge()
+                };
+                let first = shaped(&mut self.first);
+                let second = shaped(&mut self.second);
+                self.moments.push(Moments { first, second });
+            }
+        }
+        let mut shape = Shape {
+            first: first.iter(),
+            second: second.iter(),
+            device: self.learning_rate.device(),
+            moments: Vec::new(),
+        };
+        module.visit(&mut shape);
+        self.moments = shape.moments;
+        self.steps = steps;
+        self.set_learning_rate(learning_rate);
+    }
+
     /// Saves the moments and the step count of `module`'s parameters (the module stepped) to
     /// `path` (burnpack).
     pub fn save<M: Module>(&self, module: &M, path: &Path) -> Result<(), RlError> {

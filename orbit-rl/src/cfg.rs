@@ -14,6 +14,11 @@ pub struct RunnerCfg {
     /// Where the network is evaluated and trained (RSL-RL's `device`).
     #[serde(default)]
     pub device: LearnerDevice,
+    /// What runs the PPO update on the GPU (`device: Gpu`): kernels of orbit-rs's own for
+    /// MLP actor-critics, in every build (`Fused`, the default), or burn's wgpu backend, in a
+    /// build with the `gpu-learner` feature (`Burn`).
+    #[serde(default)]
+    pub gpu_update: GpuUpdate,
     /// Env steps per env collected per iteration.
     pub num_steps_per_env: usize,
     /// Iterations of `learn`.
@@ -55,6 +60,18 @@ pub enum LearnerDevice {
     /// burn's wgpu backend, on the same Vulkan device as the wgpu physics backend (needs a
     /// build with the `gpu-learner` feature).
     Gpu,
+}
+
+/// What runs a GPU learner's PPO update.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+pub enum GpuUpdate {
+    /// Kernels of `orbit-mlp-wgpu` (forward, backward, Adam and the adaptive learning rate
+    /// for a whole update in one submission) on the physics' Vulkan device; the network's
+    /// copy for checkpoints and inference stays on the CPU.
+    #[default]
+    Fused,
+    /// burn's wgpu backend (the `gpu-learner` build feature).
+    Burn,
 }
 
 /// Actor-critic network config (RSL-RL's `ActorCritic`).

@@ -28,16 +28,16 @@ pub mod storage;
 pub mod tensorboard;
 
 pub use burn;
-pub use cfg::{LearnerDevice, RunnerCfg};
+pub use cfg::{GpuUpdate, LearnerDevice, RunnerCfg};
 pub use collective::Collective;
 pub use error::RlError;
 pub use orbit_envs::{VecEnv, VecEnvStep};
 pub use policy::Policy;
 pub use runner::{IterationLog, OnPolicyRunner};
 
-/// Shares the GPU learner's wgpu device and queue, so that rollouts are collected with
-/// forward passes of their own on it (one submission per step) instead of burn's.
-#[cfg(feature = "wgpu")]
+/// Shares the GPU learner's wgpu device and queue: the fused update runs there, and rollouts
+/// are collected with forward passes of their own on it (one submission per step) instead of
+/// burn's.
 pub fn share_wgpu_device(device: orbit_mlp_wgpu::wgpu::Device, queue: orbit_mlp_wgpu::wgpu::Queue) {
     orbit_mlp_wgpu::share_device(device, queue);
 }

@@ -1,7 +1,7 @@
 //! The actor-critic network (RSL-RL's `ActorCritic`): two MLPs and a state-independent
 //! Gaussian noise parameter.
 
-use burn::module::{Module, ModuleVisitor, Param};
+use burn::module::{Module, ModuleMapper, ModuleVisitor, Param};
 use burn::nn::Linear;
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use orbit_core::rng::EnvRng;
@@ -43,6 +43,23 @@ impl Mlp {
         Self { layers, activation }
     }
 
+    /// The widths: inputs, then each layer's outputs.
+    pub fn widths(&self) -> Vec<usize> {
+        let mut widths: Vec<usize> = self
+            .layers
+            .iter()
+            .take(1)
+            .map(|l| l.weight.dims()[0])
+            .collect();
+        widths.extend(self.layers.iter().map(|l| l.weight.dims()[1]));
+        widths
+    }
+
+    /// The activation between layers.
+    pub fn activation(&self) -> Activation {
+        self.activation
+    }
+
     /// Applies the network to a batch of rows. Large batches go through as `[chunks, rows,
     /// features]` batched products (see [`row_chunks`]): the result is the same up to float
     /// rounding, but the backward pass's sums over the rows (the weight and bias gradients)
@@ -77,6 +94,19 @@ impl Mlp {
             }
         }
         x
+    }
+}
+
+/// The kernels' name for an activation.
+pub(crate) fn kernel_activation(a: Activation) -> orbit_mlp_wgpu::Activation {
+    use orbit_mlp_wgpu::Activation as Kernel;
+    match a {
+        Activation::Elu => Kernel::Elu,
+        Activation::Selu => Kernel::Selu,
+        Activation::Relu => Kernel::Relu,
+        Activation::Lrelu => Kernel::LeakyRelu,
+        Activation::Tanh => Kernel::Tanh,
+        Activation::Sigmoid => Kernel::Sigmoid,
     }
 }
 
@@ -203,6 +233,33 @@ impl ActorCritic {
         let mut flat = Flatten(Vec::new());
         self.visit(&mut flat);
         flat.0
+    }
+
+    /// The model with every parameter's values taken from `flat` (in visit order, as
+    /// [`parameter_values`](Self::parameter_values) gives them); gradient settings are kept.
+    pub fn with_parameter_values(self, flat: &[f32]) -> Self {
+        struct Replace<'a>(std::slice::Iter<'a, f32>);
+        impl ModuleMapper for Replace<'_> {
+            fn map_float<const D: usize>(&mut self, param: Param<Tensor<D>>) -> Param<Tensor<D>> {
+                let (id, tensor, mapper) = param.consume();
+                let dims = tensor.dims();
+                let n = tensor.shape().num_elements();
+                let data: Vec<f32> = self.0.by_ref().take(n).copied().collect();
+                assert_eq!(data.len(), n, "one value per parameter");
+                let device = tensor.clone().inner().device();
+                let value = crate::adam::leaf_like(
+                    Tensor::from_data(TensorData::new(data, dims), &device),
+                    &tensor,
+                );
+                Param::from_mapped_value(id, value, mapper)
+            }
+        }
+        self.map(&mut Replace(flat.iter()))
+    }
+
+    /// How the noise parameter is stored.
+    pub fn noise_std_type(&self) -> NoiseStdType {
+        self.noise_std_type
     }
 
     /// Builds the network for `num_obs` actor inputs, `num_critic_obs` critic inputs and

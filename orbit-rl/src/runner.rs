@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::RlError;
-use crate::cfg::RunnerCfg;
+use crate::cfg::{GpuUpdate, LearnerDevice, RunnerCfg};
 pub use crate::checkpoint::{CheckpointState, read_state};
 use crate::collective::{self, Collective};
 use crate::logger::ScalarLog;
@@ -141,7 +141,7 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             cfg.seed,
             &device.clone().autodiff(),
         );
-        let alg = Ppo::new(
+        let mut alg = Ppo::new(
             cfg.algorithm.clone(),
             model,
             n,
@@ -150,6 +150,9 @@ impl<E: VecEnv> OnPolicyRunner<E> {
             cfg.seed,
             device.clone().autodiff(),
         );
+        if cfg.device == LearnerDevice::Gpu && cfg.gpu_update == GpuUpdate::Fused {
+            alg.use_fused_update()?;
+        }
         let normalizers = cfg.empirical_normalization;
         let scalars = match &log_dir {
             Some(dir) => {

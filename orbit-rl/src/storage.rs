@@ -58,6 +58,27 @@ impl RolloutStorage {
         )
     }
 
+    /// The advantages as an update sees them: as stored, or with `per_minibatch` normalised
+    /// within each minibatch of `perm` (chunks of `m`; every epoch takes the same ones).
+    pub(crate) fn update_advantages(
+        &self,
+        perm: &[u32],
+        m: usize,
+        per_minibatch: bool,
+    ) -> Vec<f32> {
+        let mut advantages = self.advantages.clone();
+        if per_minibatch {
+            for chunk in perm.chunks_exact(m) {
+                let mut a: Vec<f32> = chunk.iter().map(|&i| self.advantages[i as usize]).collect();
+                normalize(&mut a);
+                for (&i, v) in chunk.iter().zip(a) {
+                    advantages[i as usize] = v;
+                }
+            }
+        }
+        advantages
+    }
+
     /// Zeroed storage for `num_steps × num_envs` transitions.
     pub fn new(
         num_steps: usize,

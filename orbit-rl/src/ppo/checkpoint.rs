@@ -26,7 +26,7 @@ impl Ppo {
             .clone()
             .save_file(model_path)
             .map_err(|e| RlError::checkpoint(model_path, e))?;
-        self.optimizer.save(&self.model, adam_path)
+        self.current_optimizer()?.save(&self.model, adam_path)
     }
 
     /// Loads the network (and, if `with_optimizer`, the optimiser state) saved by [`Ppo::save`].
@@ -54,6 +54,7 @@ impl Ppo {
         }
         self.model = model;
         self.rollout_model = None;
+        self.fused_reload();
         Ok(())
     }
 }

@@ -5,13 +5,12 @@
 
 use std::sync::Arc;
 
-use burn::module::{Module, ModuleMapper, ModuleVisitor, Param};
+use burn::module::{Module, ModuleVisitor, Param};
 use burn::optim::GradientsParams;
-use burn::tensor::{Tensor, TensorData};
+use burn::tensor::Tensor;
 use orbit_core::rng::EnvRng;
 
 use super::{Ppo, tensor1, values};
-use crate::adam::leaf_like;
 use crate::collective::{self, Collective};
 use crate::model::ActorCritic;
 use crate::streams;
@@ -40,23 +39,8 @@ impl Ppo {
 
 /// `model` with rank 0's parameter values.
 fn broadcast_parameters(c: &dyn Collective, model: ActorCritic) -> ActorCritic {
-    struct Replace(std::vec::IntoIter<f32>);
-    impl ModuleMapper for Replace {
-        fn map_float<const D: usize>(&mut self, param: Param<Tensor<D>>) -> Param<Tensor<D>> {
-            let (id, tensor, mapper) = param.consume();
-            let dims = tensor.dims();
-            let n = tensor.shape().num_elements();
-            let data: Vec<f32> = self.0.by_ref().take(n).collect();
-            let device = tensor.clone().inner().device();
-            let value = leaf_like(
-                Tensor::from_data(TensorData::new(data, dims), &device),
-                &tensor,
-            );
-            Param::from_mapped_value(id, value, mapper)
-        }
-    }
     let root = collective::from_rank_0(c, &model.parameter_values());
-    model.map(&mut Replace(root.into_iter()))
+    model.with_parameter_values(&root)
 }
 
 /// Replaces `grads` by their mean over the ranks and returns the mean of `kl` (shape `[1]`, off

@@ -4,7 +4,7 @@ use burn::tensor::{Device, Int, Tensor};
 
 use super::StepTensors;
 use super::tensor1;
-use crate::storage::{self, RolloutStorage};
+use crate::storage::RolloutStorage;
 
 /// Rollout rows on the learner's device: the whole rollout of an update (uploaded once, then
 /// every minibatch of every epoch is selected from it there: a GPU learner would otherwise
@@ -45,16 +45,7 @@ impl Minibatch {
             .iter()
             .any(|st| st.critic_obs.is_some())
             .then(|| cat(&|st| st.critic_obs.clone().unwrap_or_else(|| st.obs.clone())));
-        let mut advantages = s.advantages.clone();
-        if per_minibatch {
-            for chunk in perm.chunks_exact(m) {
-                let mut a: Vec<f32> = chunk.iter().map(|&i| s.advantages[i as usize]).collect();
-                storage::normalize(&mut a);
-                for (&i, v) in chunk.iter().zip(a) {
-                    advantages[i as usize] = v;
-                }
-            }
-        }
+        let advantages = s.update_advantages(perm, m, per_minibatch);
         Self {
             obs: cat(&|st| st.obs.clone()),
             critic_obs,

@@ -9,18 +9,20 @@
 //! (`rollout`: sampling actions, the step tensors kept on the device), the time-out bootstrap
 //! and returns (`returns`), the minibatch permutation drawn on a helper thread (`shuffle`),
 //! the rollout on the device and its minibatches (`minibatch`), the update with its losses and
-//! KL-adaptive learning rate (`update`), gradient-norm clipping (`grad_clip`), checkpoints
-//! (`checkpoint`), the replica of a data-parallel run (`distributed`) and the tensor helpers they share (`tensor`).
+//! KL-adaptive learning rate (`update`), gradient-norm clipping (`grad_clip`), the same update
+//! on fused kernels of `orbit-mlp-wgpu` (`fused`), the collection pass on such kernels
+//! (`rollout_kernel`), checkpoints (`checkpoint`), the replica of a data-parallel run
+//! (`distributed`) and the tensor helpers they share (`tensor`).
 
 mod checkpoint;
 mod distributed;
 #[cfg(test)]
 mod fixtures;
+mod fused;
 mod grad_clip;
 mod minibatch;
 mod returns;
 mod rollout;
-#[cfg(feature = "wgpu")]
 mod rollout_kernel;
 mod shuffle;
 mod tensor;
@@ -69,11 +71,11 @@ pub struct Ppo {
     rollout_model: Option<rollout::RolloutModel>,
     /// The collection pass as kernels of its own on a GPU learner's device (built at the first
     /// rollout; `None` on the CPU or where the networks do not stack).
-    #[cfg(feature = "wgpu")]
     rollout_kernel: Option<rollout_kernel::RolloutKernel>,
     /// Whether building `rollout_kernel` was tried (a failure is reported once).
-    #[cfg(feature = "wgpu")]
     rollout_kernel_tried: bool,
+    /// The update on fused kernels, where it runs there (see [`Ppo::use_fused_update`]).
+    fused: Option<fused::FusedUpdate>,
     /// The device tensors of each stored step (the update concatenates them instead of
     /// uploading the whole rollout at once).
     step_tensors: Vec<StepTensors>,
@@ -119,10 +121,9 @@ impl Ppo {
             seed,
             noise,
             rollout_model: None,
-            #[cfg(feature = "wgpu")]
             rollout_kernel: None,
-            #[cfg(feature = "wgpu")]
             rollout_kernel_tried: false,
+            fused: None,
             step_tensors: Vec::with_capacity(num_steps),
             sigma: Vec::new(),
             updates: 0,
@@ -145,5 +146,6 @@ impl Ppo {
     pub fn set_learning_rate(&mut self, learning_rate: f64) {
         self.learning_rate = learning_rate;
         self.optimizer.set_learning_rate(learning_rate);
+        self.fused_set_learning_rate(learning_rate);
     }
 }

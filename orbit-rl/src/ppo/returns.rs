@@ -24,16 +24,29 @@ impl Ppo {
         s.step += 1;
     }
 
+    /// The critic's values for `critic_obs` from the collection kernels, where they run (they
+    /// stack the networks, so the actor's inputs are as wide as the critic's).
+    fn last_values_by_kernel(&mut self, critic_obs: &[f32]) -> Option<Vec<f32>> {
+        self.rollout_model();
+        let (n, na) = (self.storage.num_envs, self.storage.num_actions);
+        let out = self
+            .rollout_kernel
+            .as_mut()?
+            .forward(critic_obs, None)
+            .ok()?;
+        Some(out[n * na..].chunks(na).map(|row| row[0]).collect())
+    }
+
     /// Computes returns and advantages with the values of the states after the last step.
     pub fn compute_returns(&mut self, last_critic_obs: &[f32]) {
-        let (n, nc) = (self.storage.num_envs, self.storage.num_critic_obs);
-        let device = self.device.clone();
-        let mut last = values(self.rollout_model().model.value(tensor2(
-            last_critic_obs.to_vec(),
-            n,
-            nc,
-            &device,
-        )));
+        let mut last = match self.last_values_by_kernel(last_critic_obs) {
+            Some(values) => values,
+            None => {
+                let (n, nc) = (self.storage.num_envs, self.storage.num_critic_obs);
+                let obs = tensor2(last_critic_obs.to_vec(), n, nc, &self.device);
+                values(self.rollout_model().model.value(obs))
+            }
+        };
         if let Some(normalizer) = &self.value_normalizer {
             normalizer.denormalize(&mut last);
         }

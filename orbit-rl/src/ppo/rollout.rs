@@ -54,7 +54,6 @@ impl Ppo {
             let model = self.model.valid();
             self.sigma = values(model.action_std());
             let stacked = StackedActorCritic::new(&model);
-            #[cfg(feature = "wgpu")]
             self.load_rollout_kernel(stacked.as_ref());
             self.rollout_model = Some(RolloutModel { model, stacked });
         }
@@ -64,7 +63,6 @@ impl Ppo {
     /// Builds the collection kernels at their first use and loads the current parameters into
     /// them. Where they cannot be built the rollout is collected with burn's forward pass,
     /// which gives the same values to float rounding; the reason is logged once.
-    #[cfg(feature = "wgpu")]
     fn load_rollout_kernel(&mut self, stacked: Option<&StackedActorCritic>) {
         use super::rollout_kernel::RolloutKernel;
         let Some(stacked) = stacked else {
@@ -73,7 +71,8 @@ impl Ppo {
         };
         if !self.rollout_kernel_tried {
             self.rollout_kernel_tried = true;
-            match RolloutKernel::for_learner(&self.device, stacked, self.storage.num_envs) {
+            let (rows, fused) = (self.storage.num_envs, self.fused.is_some());
+            match RolloutKernel::for_learner(&self.device, stacked, rows, fused) {
                 Ok(kernel) => self.rollout_kernel = kernel,
                 Err(e) => tracing::warn!("collecting rollouts with burn's forward pass: {e}"),
             }
@@ -107,45 +106,53 @@ impl Ppo {
             self.draw_next_shuffle();
         }
         let device = self.device.clone();
-        let actor_input = tensor2(parallel::to_vec(obs), n, no, &device);
-        // The same values (an env without a `critic` group): uploaded, and later
-        // concatenated, once.
-        let critic_input = (!std::ptr::eq(obs, critic_obs))
-            .then(|| tensor2(parallel::to_vec(critic_obs), n, nc, &device));
+        // The critic's own observations, where it has them (not the same values: an env
+        // without a `critic` group uploads and stores them once).
+        let separate_critic = (!std::ptr::eq(obs, critic_obs)).then_some(critic_obs);
         self.rollout_model();
-        #[cfg(feature = "wgpu")]
         let kernel_out = match self.rollout_kernel.as_mut() {
-            Some(kernel) => {
-                let separate = critic_input.is_some().then_some(critic_obs);
-                Some(kernel.forward(obs, separate)?)
-            }
+            Some(kernel) => Some(kernel.forward(obs, separate_critic)?),
             None => None,
         };
-        #[cfg(not(feature = "wgpu"))]
-        let kernel_out: Option<Vec<f32>> = None;
+        // burn's update keeps the step's inputs on its device; the fused update takes them
+        // below.
+        let inputs = self.fused.is_none().then(|| {
+            let actor = tensor2(parallel::to_vec(obs), n, no, &device);
+            let critic = separate_critic.map(|c| tensor2(parallel::to_vec(c), n, nc, &device));
+            (actor, critic)
+        });
         let rollout = self.rollout_model.as_ref().expect("built above");
         // Means and values come back in one read (each read waits for the device).
         let (mean, out, stacked) = match (kernel_out, &rollout.stacked) {
             // The kernels' outputs are laid out as the stacked pass's.
             (Some(out), _) => {
-                let mean = tensor2(out[..n * na].to_vec(), n, na, &device);
+                let mean = inputs
+                    .is_some()
+                    .then(|| tensor2(out[..n * na].to_vec(), n, na, &device));
                 (mean, out, true)
             }
-            (None, Some(stacked)) => {
-                debug_assert_eq!(stacked.num_actions(), na);
-                let both = stacked.forward(actor_input.clone(), critic_input.clone());
-                let mean = both.clone().narrow(0, 0, 1).reshape([n, na]);
-                (mean, values(both), true)
-            }
-            (None, None) => {
-                let mean = rollout.model.action_mean(actor_input.clone());
-                let critic_view = critic_input.clone().unwrap_or_else(|| actor_input.clone());
-                let value = rollout.model.value(critic_view);
-                (
-                    mean.clone(),
-                    values(Tensor::cat(vec![mean, value], 1)),
-                    false,
-                )
+            (None, stacked) => {
+                let (actor, critic) = match &inputs {
+                    Some((a, c)) => (a.clone(), c.clone()),
+                    None => (
+                        tensor2(parallel::to_vec(obs), n, no, &device),
+                        separate_critic.map(|c| tensor2(parallel::to_vec(c), n, nc, &device)),
+                    ),
+                };
+                match stacked {
+                    Some(stacked) => {
+                        debug_assert_eq!(stacked.num_actions(), na);
+                        let both = stacked.forward(actor, critic);
+                        let mean = both.clone().narrow(0, 0, 1).reshape([n, na]);
+                        (Some(mean), values(both), true)
+                    }
+                    None => {
+                        let mean = rollout.model.action_mean(actor.clone());
+                        let value = rollout.model.value(critic.unwrap_or(actor));
+                        let both = values(Tensor::cat(vec![mean.clone(), value], 1));
+                        (Some(mean), both, false)
+                    }
+                }
             }
         };
         let s = &mut self.storage;
@@ -197,12 +204,15 @@ impl Ppo {
                 *log_prob = gaussian_log_prob(a, m, sigma);
             });
         s.sigma.copy_from_slice(sigma);
-        self.step_tensors.push(StepTensors {
-            obs: actor_input,
-            critic_obs: critic_input,
-            mu: mean,
-            actions: tensor2(parallel::to_vec(actions), n, na, &device),
-        });
+        match (inputs, mean) {
+            (Some((obs, critic_obs)), Some(mu)) => self.step_tensors.push(StepTensors {
+                obs,
+                critic_obs,
+                mu,
+                actions: tensor2(parallel::to_vec(actions), n, na, &device),
+            }),
+            _ => self.fused_write_step(t, obs, separate_critic, actions)?,
+        }
         Ok(())
     }
 }

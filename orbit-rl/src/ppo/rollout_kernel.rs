@@ -4,11 +4,10 @@
 //! time (docs/training.md).
 
 use burn::tensor::Device;
-use orbit_mlp_wgpu::{Activation as KernelActivation, StackedMlp};
+use orbit_mlp_wgpu::StackedMlp;
 
 use crate::RlError;
-use crate::cfg::Activation;
-use crate::model::StackedActorCritic;
+use crate::model::{StackedActorCritic, kernel_activation};
 
 /// The most rows (envs) the kernels collect for. They save burn's fixed host cost per step,
 /// which dominates small batches; larger batches amortise it, and there the kernels' second
@@ -24,28 +23,23 @@ pub(super) struct RolloutKernel {
 
 impl RolloutKernel {
     /// The kernels for `stacked` on `rows` rows, where the learner runs on a GPU whose wgpu
-    /// device was shared (see [`orbit_mlp_wgpu::share_device`]); `None` on the CPU or beyond
-    /// [`MAX_ROWS`].
+    /// device was shared (see [`orbit_mlp_wgpu::share_device`]): with the fused update
+    /// always (burn's copy of the network is then on the CPU), with burn's GPU update up to
+    /// [`MAX_ROWS`]; else `None`.
     pub(super) fn for_learner(
         device: &Device,
         stacked: &StackedActorCritic,
         rows: usize,
+        fused: bool,
     ) -> Result<Option<Self>, RlError> {
-        if rows > MAX_ROWS || crate::on_cpu(device) {
+        if !fused && (rows > MAX_ROWS || crate::on_cpu(device)) {
             return Ok(None);
         }
         let Some((wgpu_device, queue)) = orbit_mlp_wgpu::shared_device() else {
             return Ok(None);
         };
         let widths = stacked.widths();
-        let activation = match stacked.activation() {
-            Activation::Elu => KernelActivation::Elu,
-            Activation::Selu => KernelActivation::Selu,
-            Activation::Relu => KernelActivation::Relu,
-            Activation::Lrelu => KernelActivation::LeakyRelu,
-            Activation::Tanh => KernelActivation::Tanh,
-            Activation::Sigmoid => KernelActivation::Sigmoid,
-        };
+        let activation = kernel_activation(stacked.activation());
         let mlp = StackedMlp::new(&wgpu_device, &queue, rows, 2, &widths, activation)
             .map_err(|e| RlError::Device(e.to_string()))?;
         let outputs = 2 * rows * widths.last().expect("a network has outputs");

@@ -41,6 +41,9 @@ impl Ppo {
     /// The PPO update over the stored rollout; clears the storage. An update that fails leaves
     /// the network, the optimiser, the learning rate and the rollout as they were.
     pub fn update(&mut self) -> Result<LossStats, RlError> {
+        if self.fused.is_some() {
+            return self.fused_update();
+        }
         self.rollout_model = None;
         let cfg = self.cfg.clone();
         let b = self.storage.batch_size();
