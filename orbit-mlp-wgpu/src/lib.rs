@@ -1,5 +1,6 @@
-//! Batched forward passes of small dense networks (MLPs) in one wgpu submission: the policy and
-//! value networks that pick the actions of thousands of envs at every collection step.
+//! Small dense networks (MLPs) on wgpu for the GPU learner: batched forward passes of the
+//! policy and value networks that pick the actions of thousands of envs at every collection
+//! step ([`StackedMlp`]), and PPO's whole update of them ([`PpoTrainer`]).
 //!
 //! A GPU learner built on a tensor library pays host time for every tensor operation (recording
 //! it, matching it against fused kernels, handing it to the device's thread); a forward pass of
@@ -8,8 +9,9 @@
 //! several networks of equal widths ("stacks": an actor and a critic) as one dispatch per
 //! layer, uploading the inputs and reading the outputs back once per call.
 //!
-//! Each output is one invocation's sum over its inputs in a fixed order, so a pass gives the
-//! same bits on every run of the same device and driver (no atomics, no split sums).
+//! Each output is one invocation's sum over its inputs in a fixed order (the trainer's sums over
+//! rows are split into chunks and then added in order), so a pass or an update gives the same
+//! bits on every run of the same device and driver (no atomics).
 
 mod device;
 mod error;
