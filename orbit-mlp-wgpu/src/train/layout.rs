@@ -104,12 +104,12 @@ fn layers(widths: &[usize], mut at: usize) -> (Vec<LayerAt>, usize) {
 }
 
 impl Layout {
-    /// The layout of `shape`, checked against what the kernels index with 32-bit integers and
-    /// `max_binding` bytes per buffer.
+    /// The layout of `shape`, checked against what the kernels index with 32-bit integers,
+    /// `max_binding` bytes per buffer and `max_groups` workgroups per dimension of a dispatch.
     pub(super) fn new(
         shape: &PpoShape,
         settings: &PpoSettings,
-        max_binding: u64,
+        (max_binding, max_groups): (u64, u32),
     ) -> Result<Self, MlpError> {
         let (actor_w, critic_w) = (&shape.actor_widths, &shape.critic_widths);
         if actor_w.len() < 2 || critic_w.len() < 2 || actor_w.contains(&0) || critic_w.contains(&0)
@@ -139,6 +139,14 @@ impl Layout {
             )));
         }
         let m = b / shape.minibatches;
+        // A minibatch's rows are spread over workgroups of 64 rows in one dimension.
+        let max_rows = 64 * max_groups as usize;
+        if m > max_rows {
+            return Err(MlpError::Shape(format!(
+                "a minibatch of {m} rows is more than the update's kernels take ({max_rows}): \
+                 use more minibatches"
+            )));
+        }
         let (actor, critic_at) = layers(actor_w, 0);
         let (critic, noise_at) = layers(critic_w, critic_at);
         let params = noise_at + a;
@@ -224,5 +232,77 @@ impl Layout {
             minibatch_floats,
             hyper,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Layout, chunk_rows};
+    use crate::Activation;
+    use crate::train::{PpoSettings, PpoShape};
+
+    fn shape(batch: usize, minibatches: usize) -> PpoShape {
+        PpoShape {
+            actor_widths: vec![53, 256, 128, 64, 7],
+            critic_widths: vec![53, 256, 128, 64, 1],
+            activation: Activation::Elu,
+            log_std: false,
+            batch,
+            minibatches,
+            separate_critic: false,
+        }
+    }
+
+    fn settings() -> PpoSettings {
+        PpoSettings {
+            clip: 0.2,
+            value_coef: 1.0,
+            entropy_coef: 0.0,
+            clipped_value_loss: true,
+            desired_kl: Some(0.01),
+            max_grad_norm: 1.0,
+            per_network_clip: true,
+            epochs: 5,
+        }
+    }
+
+    /// Parameters follow each other as the learner visits them: each layer's weights then
+    /// biases, the actor's layers, the critic's, then the noise; the loss slots are not
+    /// parameters.
+    #[test]
+    fn parameters_are_laid_out_in_visit_order() {
+        let l = Layout::new(&shape(4096 * 24, 16), &settings(), (1 << 31, 65535)).unwrap();
+        let layer = |k: usize, n: usize| k * n + n;
+        let actor = layer(53, 256) + layer(256, 128) + layer(128, 64) + layer(64, 7);
+        let critic = layer(53, 256) + layer(256, 128) + layer(128, 64) + layer(64, 1);
+        assert_eq!(l.hyper.critic_at as usize, actor);
+        assert_eq!(l.hyper.noise_at as usize, actor + critic);
+        assert_eq!(l.params, actor + critic + 7);
+        assert_eq!(l.critic[1].weight, actor + layer(53, 256));
+    }
+
+    /// Chunks hold at least 64 rows and number at most 128, in whole slices of 16 rows.
+    #[test]
+    fn chunks_are_short_and_few() {
+        for (m, rows) in [(100, 64), (6144, 64), (8192, 64), (8193, 80), (32768, 256)] {
+            assert_eq!(chunk_rows(m), rows, "{m} rows");
+            assert!(m.div_ceil(rows) <= 128);
+        }
+    }
+
+    /// A minibatch with more rows than a dispatch's workgroups can cover (262 144 envs × 24
+    /// steps in one minibatch, 65 535 groups of 64 rows) is refused with what to change, as is
+    /// a rollout larger than a buffer binding.
+    #[test]
+    fn oversized_minibatches_and_rollouts_are_refused() {
+        let err = Layout::new(&shape(262_144 * 24, 1), &settings(), (u64::MAX, 65535))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("use more minibatches"), "{err}");
+        assert!(Layout::new(&shape(262_144 * 24, 2), &settings(), (u64::MAX, 65535)).is_ok());
+        let err = Layout::new(&shape(131_072 * 24, 4), &settings(), (1 << 27, 65535))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("use fewer envs"), "{err}");
     }
 }

@@ -153,7 +153,8 @@ impl PpoTrainer {
         let max_binding = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        let layout = Layout::new(&shape, &settings, max_binding)?;
+        let max_groups = limits.max_compute_workgroups_per_dimension;
+        let layout = Layout::new(&shape, &settings, (max_binding, max_groups))?;
         let pipelines = Pipelines::new(device, true)?;
         let storage = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_DST
@@ -241,7 +242,11 @@ impl PpoTrainer {
             &pipelines.gather,
             kernels::GATHER,
             &[h, &b.perm, &b.rollout, &mb, &b.scal],
-            groups(m * row_floats, 256),
+            [
+                (m * row_floats).div_ceil(256).min(max_groups as usize) as u32,
+                1,
+                1,
+            ],
         )];
         let matmul = |label: String,
                       params: MatmulParams,

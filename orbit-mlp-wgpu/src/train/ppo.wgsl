@@ -103,18 +103,24 @@ fn sigma(j: u32) -> f32 {
 }
 
 // The current minibatch's rows of every section, in the permutation's order: one invocation
-// per float, so that neighbours read neighbouring floats of a row.
+// per float, so that neighbours read neighbouring floats of a row (a grid of at most the
+// device's workgroups per dimension steps through larger minibatches).
 @compute @workgroup_size(256)
-fn gather(@builtin(global_invocation_id) id: vec3<u32>) {
-    let a = h.actions;
+fn gather(@builtin(global_invocation_id) id: vec3<u32>,
+          @builtin(num_workgroups) groups: vec3<u32>) {
     let critic = select(0u, h.critic_width, h.separate_critic == 1u);
-    let width = h.obs_width + critic + 2u * a + 4u;
-    let r = id.x / width;
-    var c = id.x % width;
-    if r >= h.rows {
-        return;
+    let width = h.obs_width + critic + 2u * h.actions + 4u;
+    let first = (scal_in.minibatch % h.minibatches) * h.rows;
+    for (var i = id.x; i < h.rows * width; i += groups.x * 256u) {
+        gather_float(first, i / width, i % width, critic);
     }
-    let src = perm[(scal_in.minibatch % h.minibatches) * h.rows + r];
+}
+
+// Float `column` of minibatch row `r` (rollout row `perm[first + r]`).
+fn gather_float(first: u32, r: u32, column: u32, critic: u32) {
+    let a = h.actions;
+    let src = perm[first + r];
+    var c = column;
     if c < h.obs_width {
         mb[h.mb_obs + r * h.obs_width + c] = rollout[h.rollout_obs + src * h.obs_width + c];
         return;
