@@ -66,7 +66,8 @@ impl Ppo {
     }
 
     /// Sends step `t`'s observations and actions to the device (building the trainer at the
-    /// first step, or again where the critic's inputs changed).
+    /// first step, or again at a rollout's first step where the critic's inputs changed; a
+    /// change within a rollout is an error).
     pub(super) fn fused_write_step(
         &mut self,
         t: usize,
@@ -80,6 +81,13 @@ impl Ppo {
                 .as_ref()
                 .is_none_or(|_| f.separate_critic() != Some(separate))
         });
+        if rebuild && t > 0 {
+            return Err(RlError::EnvMismatch(format!(
+                "the fused update's rollout cannot start at step {t}: the critic's observations \
+                 changed within the rollout (an env keeps its observation groups for the whole \
+                 run), or the fused update was switched on within it"
+            )));
+        }
         if rebuild {
             self.sync_host_optimizer()?;
             let shape = self.fused_shape(separate);
@@ -414,6 +422,25 @@ mod tests {
         p.update().unwrap();
         assert_eq!(p.model.parameter_values(), clean.model.parameter_values());
         assert_eq!(p.learning_rate(), clean.learning_rate());
+    }
+
+    /// A critic that starts reading observations of its own in the middle of a rollout is
+    /// refused (the rows already sent lack them); at a rollout's first step it is taken.
+    #[test]
+    fn critic_inputs_change_only_between_rollouts() {
+        let Some(mut p) = fused(4, 2, |_| {}) else {
+            return;
+        };
+        let obs: Vec<f32> = (0..12).map(|i| i as f32 * 0.1).collect();
+        let own = obs.clone();
+        let mut actions = vec![0.0; 8];
+        p.act(&obs, &obs, &mut actions).unwrap();
+        p.process_env_step(&[0.0; 4], &[false; 4], &[false; 4]);
+        let err = p.act(&obs, &own, &mut actions).unwrap_err();
+        assert!(matches!(err, RlError::EnvMismatch(_)), "{err}");
+        p.storage.step = 0;
+        p.act(&obs, &own, &mut actions).unwrap();
+        assert!(p.fused.as_ref().unwrap().separate_critic().unwrap());
     }
 
     /// A checkpoint written after fused updates holds the device's Adam state: a fresh fused
