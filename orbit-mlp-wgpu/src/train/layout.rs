@@ -152,12 +152,15 @@ impl Layout {
         let params = noise_at + a;
         let chunk_rows = chunk_rows(m);
         let chunks = m.div_ceil(chunk_rows);
-        let nc_sep = if shape.separate_critic { nc } else { 0 };
-        // Sections: observations, critic observations, actions, means, four scalars per row.
+        // Sections: observations, critic observations (the actor's where the critic has none of
+        // its own), actions, means, four scalars per row.
         let sections = |rows: usize| {
             let obs = 0;
-            let critic = obs + rows * no;
-            let actions = critic + rows * nc_sep;
+            let (critic, actions) = if shape.separate_critic {
+                (obs + rows * no, obs + rows * (no + nc))
+            } else {
+                (obs, obs + rows * no)
+            };
             let mu = actions + rows * a;
             let scalars = mu + rows * a;
             ([obs, critic, actions, mu, scalars], scalars + 4 * rows)
@@ -202,20 +205,12 @@ impl Layout {
             obs_width: u(no),
             critic_width: u(nc),
             rollout_obs: u(rollout[0]),
-            rollout_critic: u(if shape.separate_critic {
-                rollout[1]
-            } else {
-                rollout[0]
-            }),
+            rollout_critic: u(rollout[1]),
             rollout_actions: u(rollout[2]),
             rollout_mu: u(rollout[3]),
             rollout_scalars: u(rollout[4]),
             mb_obs: u(mini[0]),
-            mb_critic: u(if shape.separate_critic {
-                mini[1]
-            } else {
-                mini[0]
-            }),
+            mb_critic: u(mini[1]),
             mb_actions: u(mini[2]),
             mb_mu: u(mini[3]),
             mb_scalars: u(mini[4]),

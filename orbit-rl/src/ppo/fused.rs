@@ -33,7 +33,8 @@ pub(super) struct FusedUpdate {
 impl Ppo {
     /// Runs this learner's updates on the fused kernels, on the wgpu device shared with
     /// [`crate::share_wgpu_device`]. Data-parallel replicas average their gradients on the
-    /// host after every minibatch, which these kernels do not: they keep burn's update.
+    /// host after every minibatch, which these kernels do not: their updates fail with an
+    /// error that says to keep burn's update.
     pub fn use_fused_update(&mut self) -> Result<(), RlError> {
         let Some((device, queue)) = orbit_mlp_wgpu::shared_device() else {
             return Err(RlError::Device(
@@ -42,13 +43,6 @@ impl Ppo {
                     .into(),
             ));
         };
-        if self.collective.is_some() {
-            return Err(RlError::Device(
-                "data-parallel training averages gradients on the host after every \
-                 minibatch, which the fused GPU update does not: set `gpu_update: Burn`"
-                    .into(),
-            ));
-        }
         self.fused = Some(FusedUpdate {
             device,
             queue,
@@ -200,9 +194,6 @@ impl Ppo {
             m,
             self.cfg.normalize_advantage_per_mini_batch,
         );
-        let params = self.model.parameter_values();
-        let moments = self.optimizer.flat_moments(&self.model);
-        let (steps, learning_rate) = (self.optimizer.steps(), self.learning_rate as f32);
         let Some(f) = &mut self.fused else {
             unreachable!("called on a fused learner")
         };
@@ -212,9 +203,13 @@ impl Ppo {
             ));
         };
         let device_error = |e: orbit_mlp_wgpu::MlpError| RlError::Device(e.to_string());
+        // The host's state goes up only where the device's is behind it.
         if f.stale {
+            let params = self.model.parameter_values();
+            let (first, second) = self.optimizer.flat_moments(&self.model);
+            let (steps, learning_rate) = (self.optimizer.steps(), self.learning_rate as f32);
             trainer
-                .load_state(&params, (&moments.0, &moments.1), steps, learning_rate)
+                .load_state(&params, (&first, &second), steps, learning_rate)
                 .map_err(device_error)?;
             f.stale = false;
         }

@@ -114,13 +114,14 @@ impl Ppo {
             Some(kernel) => Some(kernel.forward(obs, separate_critic)?),
             None => None,
         };
-        // burn's update keeps the step's inputs on its device; the fused update takes them
-        // below.
-        let inputs = self.fused.is_none().then(|| {
+        // The step's inputs as burn tensors: burn's update keeps them on its device (the fused
+        // update takes them below), and burn's forward pass reads them.
+        let burn_inputs = || {
             let actor = tensor2(parallel::to_vec(obs), n, no, &device);
             let critic = separate_critic.map(|c| tensor2(parallel::to_vec(c), n, nc, &device));
             (actor, critic)
-        });
+        };
+        let inputs = self.fused.is_none().then(burn_inputs);
         let rollout = self.rollout_model.as_ref().expect("built above");
         // Means and values come back in one read (each read waits for the device).
         let (mean, out, stacked) = match (kernel_out, &rollout.stacked) {
@@ -132,13 +133,7 @@ impl Ppo {
                 (mean, out, true)
             }
             (None, stacked) => {
-                let (actor, critic) = match &inputs {
-                    Some((a, c)) => (a.clone(), c.clone()),
-                    None => (
-                        tensor2(parallel::to_vec(obs), n, no, &device),
-                        separate_critic.map(|c| tensor2(parallel::to_vec(c), n, nc, &device)),
-                    ),
-                };
+                let (actor, critic) = inputs.clone().unwrap_or_else(burn_inputs);
                 match stacked {
                     Some(stacked) => {
                         debug_assert_eq!(stacked.num_actions(), na);
